@@ -1,0 +1,237 @@
+"""Datasets: make them present and verified, and load the Intel ``.mat`` files.
+
+The registry is ``data/manifest.tsv`` (path relative to ``data/``, SHA-256, upstream URL).
+:func:`ensure` makes one file present in ``data/`` by, in order:
+
+1. using the copy already in ``data/`` (verified);
+2. copying it from ``../shared/data/`` beside the project root (verified);
+3. downloading it from its upstream URL (verified).
+
+A checksum mismatch never overwrites a file the user has: the bad download is kept
+aside as ``<name>.partial`` and an :class:`~hw4.errors.InputError` says what to do.
+
+:func:`load_intel` returns plain arrays (poses and scans) and validates the structure.
+"""
+from __future__ import annotations
+
+import hashlib
+import os
+import shutil
+import urllib.request
+import zipfile
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from .errors import InputError
+
+PROJECT_ROOT = Path(__file__).resolve().parent.parent
+DATA_DIR = Path(os.environ.get("HW4_DATA_DIR", PROJECT_ROOT / "data"))
+SHARED_DIR = Path(os.environ.get("HW4_SHARED_DATA", PROJECT_ROOT.parent / "shared" / "data"))
+MANIFEST = PROJECT_ROOT / "data" / "manifest.tsv"
+
+INTEL = "intel/sample_Intel_dataset.mat"
+INTEL_SEMANTIC = "intel/sample_Intel_dataset_semantic.mat"
+N_LABELS = 6  # Intel semantic labels 1..6
+
+
+def manifest() -> dict[str, tuple[str, str]]:
+    """Return ``{relative path: (sha256, url)}`` from ``data/manifest.tsv`` (url '-' = none)."""
+    rows = {}
+    for line in MANIFEST.read_text().splitlines()[1:]:
+        if line.strip():
+            path, sha, url = line.split("\t")
+            rows[path] = (sha, url)
+    return rows
+
+
+def sha256(path: Path) -> str:
+    """SHA-256 hex digest of a file."""
+    h = hashlib.sha256()
+    with open(path, "rb") as f:
+        for block in iter(lambda: f.read(1 << 20), b""):
+            h.update(block)
+    return h.hexdigest()
+
+
+def ensure(name: str, data_dir: Path | None = None, shared_dir: Path | None = None,
+           download: bool = True) -> Path:
+    """Make the manifest file ``name`` present and verified in ``data_dir``; return its path.
+
+    Parameters
+    ----------
+    name : str
+        Path relative to ``data/`` as listed in the manifest, e.g. ``"intel/sample_Intel_dataset.mat"``.
+    data_dir, shared_dir : Path, optional
+        Override ``data/`` and ``../shared/data/`` (tests use temporary folders).
+    download : bool
+        Allow the last resort, the download from the upstream URL.
+    """
+    data_dir = Path(data_dir or DATA_DIR)
+    shared_dir = Path(shared_dir or SHARED_DIR)
+    rows = manifest()
+    if name not in rows:
+        raise InputError(f"{name} is not a dataset file listed in data/manifest.tsv.")
+    want, url = rows[name]
+    target = data_dir / name
+    if target.exists():
+        if sha256(target) != want:
+            raise InputError(
+                f"{target} does not match its SHA-256 in data/manifest.tsv (corrupt or a different "
+                f"file): move it away and run `python -m hw4 data` to fetch a verified copy.")
+        return target
+    target.parent.mkdir(parents=True, exist_ok=True)
+    source = shared_dir / name
+    partial = target.with_name(target.name + ".partial")
+    if source.exists():
+        shutil.copyfile(source, partial)
+        origin = str(source)
+    elif download and url != "-":
+        try:
+            with urllib.request.urlopen(url, timeout=60) as r, open(partial, "wb") as f:
+                shutil.copyfileobj(r, f)
+        except OSError as e:
+            raise InputError(f"{name} is missing from {data_dir} and {shared_dir}, and its download "
+                             f"from {url} failed ({e}): copy the file there by hand.") from None
+        origin = url
+    else:
+        raise InputError(f"{name} is missing from {data_dir} and {shared_dir} and has no upstream "
+                         f"URL to download from: copy the file into {data_dir / name}.")
+    if sha256(partial) != want:
+        raise InputError(f"{name} copied from {origin} does not match its SHA-256 in "
+                         f"data/manifest.tsv (kept as {partial} for inspection): get a clean copy.")
+    partial.replace(target)
+    return target
+
+
+def ensure_all(prefix: str = "", **kw) -> list[Path]:
+    """Ensure every manifest file whose path starts with ``prefix``; return their paths."""
+    return [ensure(n, **kw) for n in manifest() if n.startswith(prefix)]
+
+
+@dataclass
+class IntelData:
+    """The Intel Research Lab sample as plain arrays.
+
+    Attributes
+    ----------
+    poses : (T, 3) float array [m, m, rad]
+        Robot poses (x, y, heading) in the world frame.
+    scans : list of T arrays, each (2, N) or (3, N)
+        Beam end points (x; y) in the robot frame [m]; a third row holds the semantic label 1..6.
+    """
+    poses: np.ndarray
+    scans: list
+
+    @property
+    def semantic(self) -> bool:
+        return self.scans[0].shape[0] == 3
+
+
+def _loadmat(path: Path) -> dict:
+    from scipy.io import loadmat
+    try:
+        return loadmat(str(path))
+    except (ValueError, TypeError, OSError, EOFError, zipfile.BadZipFile, IndexError, KeyError) as e:
+        raise InputError(f"{path} is not a readable MATLAB .mat file ({type(e).__name__}: "
+                         f"{str(e).splitlines()[0] if str(e) else 'truncated'}): "
+                         f"re-fetch it with `python -m hw4 data`.") from None
+    except Exception as e:  # scipy raises assorted errors on truncated files
+        raise InputError(f"{path} is a corrupt or truncated .mat file ({type(e).__name__}): "
+                         f"re-fetch it with `python -m hw4 data`.") from None
+
+
+def poses_from_struct(pose) -> np.ndarray:
+    """Convert the ``robotPose`` struct as ``scipy.io.loadmat`` returns it into a (T, 3) array.
+
+    Raises :class:`InputError` when the fields ``x``, ``y``, ``h`` are missing or disagree in length.
+    """
+    try:
+        cols = [np.asarray(pose[k][0][0], dtype=float).reshape(-1) for k in ("x", "y", "h")]
+    except (KeyError, IndexError, ValueError, TypeError):
+        raise InputError("robotPose must be the MATLAB struct with fields x, y, h "
+                         "(as scipy.io.loadmat returns it).") from None
+    if not (len(cols[0]) == len(cols[1]) == len(cols[2])):
+        raise InputError("robotPose fields x, y, h have different lengths "
+                         f"({len(cols[0])}, {len(cols[1])}, {len(cols[2])}).")
+    return np.column_stack(cols)
+
+
+def scans_from_cell(scan) -> list:
+    """Convert the ``laserScan`` cell array as ``scipy.io.loadmat`` returns it into a list of arrays."""
+    try:
+        arr = np.asarray(scan, dtype=object).reshape(-1)
+        out = [np.asarray(s, dtype=float) for s in arr]
+        out = [s[0] if (s.ndim == 3 or (s.dtype == object)) else s for s in out]
+    except (ValueError, TypeError):
+        raise InputError("laserScan must be the MATLAB cell array of 2xN (or 3xN) arrays "
+                         "(as scipy.io.loadmat returns it).") from None
+    return out
+
+
+def validate(poses: np.ndarray, scans: list, semantic: bool | None = None) -> None:
+    """Check poses and scans; raise :class:`InputError` with one sentence on the first problem.
+
+    Parameters
+    ----------
+    poses : (T, 3) array [m, m, rad], world frame
+    scans : list of T arrays (2, N) or (3, N) [m], robot frame (row 3: label 1..6)
+    semantic : bool, optional
+        When True every scan must have the label row; when False it is ignored.
+    """
+    poses = np.asarray(poses)
+    if poses.ndim != 2 or poses.shape[1] != 3:
+        raise InputError(f"poses must be a (T, 3) array of x, y, heading; got shape {poses.shape}.")
+    if len(poses) == 0:
+        raise InputError("there are no robot poses.")
+    if not np.all(np.isfinite(poses)):
+        bad = int(np.flatnonzero(~np.all(np.isfinite(poses), axis=1))[0])
+        raise InputError(f"robot pose {bad} contains NaN or inf.")
+    if len(scans) != len(poses):
+        raise InputError(f"there are {len(poses)} poses but {len(scans)} scans; "
+                         "each pose needs exactly one scan.")
+    for t, s in enumerate(scans):
+        s = np.asarray(s)
+        if s.ndim != 2 or s.shape[0] not in (2, 3):
+            raise InputError(f"scan {t} must be a 2xN (or 3xN with labels) array; got shape {s.shape}.")
+        if s.shape[1] == 0:
+            raise InputError(f"scan {t} is empty (no beam end points).")
+        if not np.all(np.isfinite(s)):
+            raise InputError(f"scan {t} contains NaN or inf.")
+        if semantic:
+            if s.shape[0] != 3:
+                raise InputError(f"scan {t} has no label row (2xN): a semantic model needs the "
+                                 "3xN scans of sample_Intel_dataset_semantic.mat.")
+            lab = s[2]
+            if np.any((lab < 1) | (lab > N_LABELS) | (lab != np.round(lab))):
+                bad = lab[(lab < 1) | (lab > N_LABELS) | (lab != np.round(lab))][0]
+                raise InputError(f"scan {t} has label {bad:g}; labels must be integers 1..{N_LABELS}.")
+
+
+def load_intel(semantic: bool = False, path: Path | None = None) -> IntelData:
+    """Load (and first ensure) the Intel sample as plain arrays, validated.
+
+    Parameters
+    ----------
+    semantic : bool
+        Load ``sample_Intel_dataset_semantic.mat`` (3xN scans with labels) instead of the plain one.
+    path : Path, optional
+        Read this ``.mat`` file instead of the verified copy in ``data/``.
+    """
+    if path is None:
+        path = ensure(INTEL_SEMANTIC if semantic else INTEL)
+    raw = _loadmat(Path(path))
+    for key in ("robotPose", "laserScan"):
+        if key not in raw:
+            raise InputError(f"{path} has no variable '{key}': it is not an Intel dataset file.")
+    poses = poses_from_struct(raw["robotPose"])
+    scans = scans_from_cell(raw["laserScan"])
+    validate(poses, scans, semantic=semantic)
+    return IntelData(poses, scans)
+
+
+def load_intel_raw(semantic: bool = False) -> tuple:
+    """Return ``(robotPose, laserScan)`` exactly as ``scipy.io.loadmat`` gives them (template faces)."""
+    raw = _loadmat(ensure(INTEL_SEMANTIC if semantic else INTEL))
+    return raw["robotPose"], raw["laserScan"]
