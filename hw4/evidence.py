@@ -1,0 +1,252 @@
+"""The counting core: evidence per cell for the four counting sensor models.
+
+One function, :func:`count_evidence`, computes the pseudo-counts that Algorithms 1 and 2 of the
+homework (and their semantic versions, Eqs. 8 and 9) add to every cell, as a plain
+``(n_cells, K)`` array; priors and posteriors live in :mod:`hw4.posterior`.
+
+Columns: binary models ``K = 2`` (column 0 occupied = alpha, column 1 free = beta);
+semantic models ``K = num_labels + 1`` (column ``c - 1`` for label ``c``, free space last).
+
+How the loops of the template become array code
+-----------------------------------------------
+The template loops over cells, over the 16 poses nearest to each cell, and (inside
+``nanargmin``) over beams. Here the (cell, pose) pairs of a block of cells are built at once
+(KD-tree query), the pairs outside the perceptual field are dropped, and the nearest beam of
+every pair comes from a per-pose sorted bearing index (:class:`hw4.sensor.BeamTable`). The
+continuous model then evaluates, per pair, only the free samples that can lie within ``l`` of
+the cell (at most ``2 l / step + 2`` of them), computed with the same floating-point steps as
+the loop. Counts are summed with ``np.bincount``. With ``beams='all'`` the loop runs over poses
+instead, each pose's end points and free samples being matched to the grid cells within ``l``.
+"""
+from __future__ import annotations
+
+import numpy as np
+from scipy.spatial import cKDTree
+
+from .errors import InputError
+from .grid import Grid
+from .kernel import LENGTH, SIGMA0, sparse_kernel
+from .sensor import N_BEAMS, Z_MAX, BeamTable, in_field, relative, wrap_to_pi
+
+PAIRS_PER_BLOCK = 1 << 21  # (cell, pose) pairs processed at once; bounds the working memory
+SAMPLE_STEP = 0.1          # default free-sample spacing along a beam [m] (= l / 2)
+
+
+def _check(value, name, lo=0.0, allow_none=False):
+    if value is None and allow_none:
+        return
+    if isinstance(value, bool) or not np.isscalar(value) or not np.isfinite(value) or value <= lo:
+        raise InputError(f"{name} must be a finite number greater than {lo:g}; got {value!r}.")
+
+
+def count_evidence(grid: Grid, poses, scans, *, model: str = "discrete", semantic: bool = False,
+                   nearest_poses: int | None = 16, beams: str = "nearest", z_max: float = Z_MAX,
+                   w_obstacle: float | None = None, w_beam: float = 2 * np.pi / N_BEAMS,
+                   sigma0: float = SIGMA0, l: float = LENGTH, sample_step: float = SAMPLE_STEP,
+                   num_labels: int = 6, progress: bool = False) -> np.ndarray:
+    """Evidence (pseudo-counts, prior excluded) of every grid cell.
+
+    Parameters
+    ----------
+    grid : Grid
+        Cell centres [m], world frame.
+    poses : (T, 3) array [m, m, rad], world frame
+        Robot poses (x, y, heading).
+    scans : list of T arrays (2, N) or (3, N)
+        Beam end points [m] in the robot frame; row 3 holds labels 1..num_labels (semantic).
+    model : {'discrete', 'continuous'}
+        Algorithm 1 (counting in cells) or Algorithm 2 (sparse-kernel weighted counts).
+    semantic : bool
+        Dirichlet counts per label plus free space instead of Beta (alpha, beta).
+    nearest_poses : int or None
+        Poses considered per cell: the ``nearest_poses`` nearest (template: 16), or all poses
+        within ``z_max`` when None.
+    beams : {'nearest', 'all'}
+        Continuous models only: the beam nearest in bearing (Algorithm 2) or every beam of each
+        considered pose whose end point or free samples lie within ``l`` (Eqs. 4, 5, 9 in full).
+    z_max : float [m]
+        Maximum laser range; also the radius of the perceptual field.
+    w_obstacle : float [m]
+        Obstacle thickness of Algorithm 1 (template: 2 grid_size, the default).
+    w_beam : float [rad]
+        Beam width of Algorithm 1 (template: 2 pi / 133).
+    sigma0, l : float
+        Sparse kernel scale and length scale [m].
+    sample_step : float [m]
+        Spacing of the free samples at s = 0, step, 2 step, ... strictly short of the end point.
+    num_labels : int
+        Semantic labels 1..num_labels.
+    progress : bool
+        Show a tqdm progress bar.
+
+    Returns
+    -------
+    (n_cells, K) float array of evidence, free space in the last column.
+    """
+    if model not in ("discrete", "continuous"):
+        raise InputError(f"model must be 'discrete' or 'continuous'; got {model!r}.")
+    if beams not in ("nearest", "all"):
+        raise InputError(f"beams must be 'nearest' or 'all'; got {beams!r}.")
+    if beams == "all" and model == "discrete":
+        raise InputError("beams='all' applies to the continuous models only.")
+    if nearest_poses is not None and (isinstance(nearest_poses, bool)
+                                      or not isinstance(nearest_poses, (int, np.integer))
+                                      or nearest_poses < 1):
+        raise InputError(f"nearest_poses must be a positive integer or None; got {nearest_poses!r}.")
+    if w_obstacle is None:
+        w_obstacle = 2 * grid.grid_size
+    for v, name in ((z_max, "z_max"), (w_obstacle, "w_obstacle"), (w_beam, "w_beam"),
+                    (sigma0, "sigma0"), (l, "l"), (sample_step, "sample_step")):
+        _check(v, name)
+    poses = np.asarray(poses, dtype=float)
+    table = BeamTable.from_scans(scans)
+    n_classes = num_labels + 1 if semantic else 2
+    if semantic:
+        cls_hit = table.labels - 1
+        if np.any((cls_hit < 0) | (cls_hit >= num_labels)):
+            raise InputError(f"semantic models need labels 1..{num_labels} in row 3 of every scan.")
+    else:
+        cls_hit = np.zeros(len(table.ranges), dtype=np.int64)
+    free = n_classes - 1
+    acc = np.zeros(grid.n_cells * n_classes)
+
+    def add(cell, cls, w=None):
+        acc[:] += np.bincount(cell * n_classes + cls, weights=w, minlength=acc.size)
+
+    if beams == "all":
+        _all_beams(grid, poses, table, cls_hit, free, add, nearest_poses, z_max, sigma0, l,
+                   sample_step, progress)
+        return acc.reshape(grid.n_cells, n_classes)
+
+    for cell, pose, r, phi in _pairs(grid, poses, nearest_poses, z_max, progress):
+        k = table.nearest(pose, phi)
+        zk = table.ranges[k]
+        if model == "discrete":
+            half = w_obstacle / 2
+            outside = (r > np.minimum(z_max, zk + half)) | (
+                np.abs(wrap_to_pi(table.bearings[k] - phi)) > w_beam / 2)
+            hit = ~outside & (zk < z_max) & (np.abs(r - zk) < half)
+            passed = ~outside & ~hit & (r < zk) & (zk < z_max)
+            add(cell[hit], cls_hit[k[hit]])
+            add(cell[passed], np.full(passed.sum(), free))
+        else:
+            _continuous_nearest(grid, poses, table, cls_hit, free, add, cell, pose, k,
+                                sigma0, l, sample_step)
+    return acc.reshape(grid.n_cells, n_classes)
+
+
+def _pairs(grid, poses, nearest_poses, z_max, progress):
+    """Yield blocks of (cell, pose, r, phi) for the poses each cell considers, inside the field."""
+    cells = grid.cells
+    n_poses = len(poses)
+    per_cell = n_poses if nearest_poses is None else min(nearest_poses, n_poses)
+    block = max(1, PAIRS_PER_BLOCK // per_cell)
+    tree = cKDTree(poses[:, :2]) if nearest_poses is not None else None
+    starts = range(0, len(cells), block)
+    if progress:
+        from tqdm import tqdm
+        starts = tqdm(starts, desc="cells", unit="block", leave=False)
+    for s in starts:
+        idx = np.arange(s, min(s + block, len(cells)))
+        if tree is not None:
+            _, nn = tree.query(cells[idx], k=per_cell)
+            pose = nn.reshape(-1)
+        else:
+            pose = np.tile(np.arange(n_poses), len(idx))
+        cell = np.repeat(idx, per_cell)
+        r, phi = relative(cells[cell], poses[pose])
+        keep = in_field(r, phi, z_max)
+        yield cell[keep], pose[keep], r[keep], phi[keep]
+
+
+def _n_samples(z, step):
+    """Number of free samples j * step (j = 0, 1, ...) strictly short of range z [m]."""
+    n = np.ceil(z / step).astype(np.int64)
+    n = np.where((n - 1) * step >= z, n - 1, n)
+    return np.where(n * step < z, n + 1, n)
+
+
+def _continuous_nearest(grid, poses, table, cls_hit, free, add, cell, pose, k, sigma0, l, step):
+    """Algorithm 2 for (cell, pose) pairs whose nearest beam is ``k``."""
+    cells = grid.cells[cell]
+    p = poses[pose]
+    zk = table.ranges[k]
+    theta = table.bearings[k] + p[:, 2]
+    c, s = np.cos(theta), np.sin(theta)
+    # end point -> occupied evidence
+    d1 = np.sqrt((cells[:, 0] - (p[:, 0] + zk * c)) ** 2 + (cells[:, 1] - (p[:, 1] + zk * s)) ** 2)
+    near = d1 < l
+    add(cell[near], cls_hit[k[near]], sparse_kernel(d1[near], sigma0, l))
+    # free samples: only those within l of the cell can count
+    dx, dy = cells[:, 0] - p[:, 0], cells[:, 1] - p[:, 1]
+    t = dx * c + dy * s
+    e = dx * s - dy * c
+    m = (np.abs(e) < l) & (t > -l) & (t < zk + l)
+    cell, p, zk, c, s, t, cells = cell[m], p[m], zk[m], c[m], s[m], t[m], cells[m]
+    j_lo = np.maximum(np.floor((t - l) / step).astype(np.int64), 0)
+    j_hi = np.minimum(np.ceil((t + l) / step).astype(np.int64), _n_samples(zk, step) - 1)
+    for o in range(int(np.ceil(2 * l / step)) + 2):
+        j = j_lo + o
+        ok = j <= j_hi
+        if not ok.any():
+            break
+        sj = j[ok] * step
+        d2 = np.sqrt((cells[ok, 0] - (p[ok, 0] + sj * c[ok])) ** 2
+                     + (cells[ok, 1] - (p[ok, 1] + sj * s[ok])) ** 2)
+        near = d2 < l
+        add(cell[ok][near], np.full(near.sum(), free), sparse_kernel(d2[near], sigma0, l))
+
+
+def _all_beams(grid, poses, table, cls_hit, free, add, nearest_poses, z_max, sigma0, l, step,
+               progress):
+    """Full kernel sums: every beam of every considered pose, matched to cells within l."""
+    n_poses, n_cells = len(poses), grid.n_cells
+    selected = None
+    if nearest_poses is not None:
+        _, nn = cKDTree(poses[:, :2]).query(grid.cells, k=min(nearest_poses, n_poses))
+        nn = nn.reshape(n_cells, -1)
+        order = np.argsort(nn.reshape(-1), kind="stable")
+        by_pose = (order // nn.shape[1])  # cells, grouped by the pose they consider
+        bounds = np.searchsorted(nn.reshape(-1)[order], np.arange(n_poses + 1))
+        selected = np.zeros(n_cells, dtype=bool)
+    g = grid.grid_size
+    reach = int(np.ceil(l / g)) + 1
+    off = np.arange(-reach, reach + 1)
+    oy, ox = [a.reshape(-1) for a in np.meshgrid(off, off, indexing="ij")]
+    nx, ny = len(grid.x), len(grid.y)
+    it = range(n_poses)
+    if progress:
+        from tqdm import tqdm
+        it = tqdm(it, desc="poses", unit="pose", leave=False)
+    for t in it:
+        b = np.arange(table.first[t], table.first[t + 1])
+        px, py, h = poses[t]
+        theta = table.bearings[b] + h
+        c, s = np.cos(theta), np.sin(theta)
+        z = table.ranges[b]
+        ns = _n_samples(z, step)
+        beam = np.repeat(np.arange(len(b)), ns)
+        sj = (np.arange(ns.sum()) - np.repeat(np.cumsum(ns) - ns, ns)) * step
+        pts = np.concatenate([np.column_stack([px + z * c, py + z * s]),
+                              np.column_stack([px + sj * c[beam], py + sj * s[beam]])])
+        cls = np.concatenate([cls_hit[b], np.full(len(sj), free)])
+        ix = np.rint((pts[:, 0] - grid.x[0]) / g).astype(np.int64)
+        iy = np.rint((pts[:, 1] - grid.y[0]) / g).astype(np.int64)
+        cx = (ix[:, None] + ox[None, :]).reshape(-1)
+        cy = (iy[:, None] + oy[None, :]).reshape(-1)
+        pi = np.repeat(np.arange(len(pts)), len(ox))
+        inside = (cx >= 0) & (cx < nx) & (cy >= 0) & (cy < ny)
+        cx, cy, pi = cx[inside], cy[inside], pi[inside]
+        d = np.sqrt((grid.x[cx] - pts[pi, 0]) ** 2 + (grid.y[cy] - pts[pi, 1]) ** 2)
+        near = d < l
+        cx, cy, pi, d = cx[near], cy[near], pi[near], d[near]
+        cell = cy * nx + cx
+        if selected is not None:
+            mine = by_pose[bounds[t]:bounds[t + 1]]
+            selected[mine] = True
+            ok = selected[cell]
+            selected[mine] = False
+            cell, cx, cy, pi, d = cell[ok], cx[ok], cy[ok], pi[ok], d[ok]
+        r, phi = relative(np.column_stack([grid.x[cx], grid.y[cy]]), poses[t])
+        ok = in_field(r, phi, z_max)
+        add(cell[ok], cls[pi[ok]], sparse_kernel(d[ok], sigma0, l))

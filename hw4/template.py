@@ -1,0 +1,150 @@
+"""The course template's map class, once: the four homework files subclass it.
+
+A template map is built as the students' files are used::
+
+    ogm = ogm_CSM()                          # keyword arguments override parameters
+    ogm.construct_map(robotPose, laserScan)  # structures exactly as scipy.io.loadmat returns them
+    ogm.build_ogm()
+    ogm.map['mean'], ogm.map['variance']
+
+and carries the attributes the course's ``utils.py`` plotting code reads (``map['occMap'].data``,
+``map['size']``, ``grid_size``, ``range_x``, ``range_y``, ``num_classes``). The work is done by
+:func:`hw4.evidence.count_evidence`; this class only converts data on the way in and fills
+``self.map`` on the way out.
+"""
+from __future__ import annotations
+
+import numpy as np
+from scipy.spatial import KDTree
+
+from . import data as _data
+from .errors import InputError
+from .evidence import SAMPLE_STEP, count_evidence
+from .grid import RANGE_X, RANGE_Y, GRID_SIZE, Grid
+from .kernel import LENGTH, SIGMA0
+from .posterior import beta_mean_variance, dirichlet_mean_variance
+from .sensor import N_BEAMS, Z_MAX
+
+PRIOR = 1e-3  # alpha_0 = beta_0 (per class for the Dirichlet): small and uninformative
+
+
+class CountingSensorMap:
+    """Occupancy (Beta) or semantic (Dirichlet) grid map built with a counting sensor model.
+
+    Keyword parameters (all optional; defaults are the course template's)
+    ---------------------------------------------------------------------
+    grid_size : float [m]          cell edge length (0.135)
+    range_x, range_y : [lo, hi] [m] map extent, world frame ([-15, 20], [-25, 10])
+    z_max : float [m]              laser maximum range (30)
+    n_beams : int                  beam count defining w_beam = 2 pi / n_beams (133)
+    nearest_poses : int or None    poses per cell: 16 nearest (template) or all within z_max
+    prior_alpha : float            alpha_0 = beta_0 added to every count (1e-3)
+    progress : bool                tqdm progress bar while building
+    Continuous models also take ``sigma`` (0.1), ``l`` [m] (0.2), ``sample_step`` [m] (0.1) and
+    ``beams`` ('nearest' = Algorithm 2, or 'all' = every beam within l: Eqs. 4, 5, 9 in full).
+    """
+
+    continuous = False
+    semantic = False
+
+    def __init__(self, grid_size=GRID_SIZE, range_x=RANGE_X, range_y=RANGE_Y, z_max=Z_MAX,
+                 n_beams=N_BEAMS, nearest_poses=16, prior_alpha=PRIOR, progress=False, **kw):
+        self.range_x = list(range_x)
+        self.range_y = list(range_y)
+        self.z_max = z_max
+        self.n_beams = n_beams
+        self.grid_size = grid_size
+        self.w_obstacle = 2 * grid_size if isinstance(grid_size, (int, float)) else None
+        self.w_beam = 2 * np.pi / n_beams
+        self.nn = nearest_poses
+        self.nearest_poses = nearest_poses
+        self.prior = prior_alpha
+        self.prior_alpha = prior_alpha
+        self.progress = progress
+        if self.continuous:
+            self.sigma = kw.pop("sigma", SIGMA0)
+            self.l = kw.pop("l", LENGTH)
+            self.sample_step = kw.pop("sample_step", SAMPLE_STEP)
+            self.beams = kw.pop("beams", "nearest")
+        if self.semantic:
+            self.num_classes = kw.pop("num_classes", _data.N_LABELS)
+        if kw:
+            raise InputError(f"{type(self).__name__} got unknown parameter(s): {', '.join(kw)}.")
+        if isinstance(prior_alpha, bool) or not np.isscalar(prior_alpha) or not prior_alpha > 0:
+            raise InputError(f"prior_alpha must be a positive number; got {prior_alpha!r}.")
+        self.map = {}
+        self.pose = {}
+        self.scan = []
+        self.m_i = {}
+        self.grid = None
+
+    @property
+    def n_columns(self) -> int:
+        """Evidence columns: 2 (alpha, beta) or num_classes + 1 (free space last)."""
+        return self.num_classes + 1 if self.semantic else 2
+
+    def construct_map(self, pose, scan):
+        """Set up the grid and the data.
+
+        Parameters
+        ----------
+        pose : ``robotPose`` struct as ``scipy.io.loadmat`` returns it (fields x, y, h: world
+            frame [m, m, rad]), or a (T, 3) array.
+        scan : ``laserScan`` cell as ``loadmat`` returns it (each 2xN, or 3xN with labels, robot
+            frame [m]), or a list of such arrays.
+        """
+        poses = np.asarray(pose, dtype=float) if isinstance(pose, np.ndarray) and pose.dtype != object \
+            and pose.dtype.names is None else _data.poses_from_struct(pose)
+        scans = list(scan) if isinstance(scan, list) else _data.scans_from_cell(scan)
+        _data.validate(poses, scans, semantic=self.semantic)
+        self.grid = Grid(self.grid_size, tuple(self.range_x), tuple(self.range_y), self.n_columns)
+        t = self.grid.cells
+        self.map['occMap'] = KDTree(t)
+        self.map['size'] = t.shape[0]
+        self.pose = {"x": poses[:, 0:1], "y": poses[:, 1:2], "h": poses[:, 2:3],
+                     "mdl": KDTree(poses[:, :2])}
+        self.poses = poses
+        self.scans = scans
+        self.scan = scan
+        if self.semantic:
+            self.map['alpha'] = np.full((t.shape[0], self.n_columns), float(self.prior_alpha))
+        else:
+            self.map['alpha'] = np.full((t.shape[0], 1), float(self.prior_alpha))
+            self.map['beta'] = np.full((t.shape[0], 1), float(self.prior_alpha))
+        self._summarise()
+
+    def evidence_options(self) -> dict:
+        """Keyword arguments for :func:`hw4.evidence.count_evidence` from this map's parameters."""
+        opts = dict(model="continuous" if self.continuous else "discrete", semantic=self.semantic,
+                    nearest_poses=self.nearest_poses, z_max=self.z_max, w_beam=self.w_beam,
+                    w_obstacle=2 * self.grid_size, progress=self.progress)
+        if self.semantic:
+            opts["num_labels"] = self.num_classes
+        if self.continuous:
+            opts.update(beams=self.beams, sigma0=self.sigma, l=self.l, sample_step=self.sample_step)
+        return opts
+
+    def build_ogm(self):
+        """Accumulate the evidence of every scan and compute mean and variance of every cell."""
+        if self.grid is None:
+            raise InputError("call construct_map(pose, scan) before build_ogm().")
+        counts = count_evidence(self.grid, self.poses, self.scans, **self.evidence_options())
+        self.counts = counts
+        if self.semantic:
+            self.map['alpha'] = self.prior_alpha + counts
+        else:
+            self.map['alpha'] = self.prior_alpha + counts[:, 0:1]
+            self.map['beta'] = self.prior_alpha + counts[:, 1:2]
+        self._summarise()
+
+    def _summarise(self):
+        if self.semantic:
+            self.map['mean'], self.map['variance'] = dirichlet_mean_variance(self.map['alpha'])
+        else:
+            self.map['mean'], self.map['variance'] = beta_mean_variance(self.map['alpha'],
+                                                                        self.map['beta'])
+
+    @property
+    def observed(self) -> np.ndarray:
+        """(n_cells,) bool: the cell received any evidence."""
+        return self.counts.sum(axis=1) > 0
