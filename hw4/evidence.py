@@ -26,7 +26,7 @@ from scipy.spatial import cKDTree
 from .errors import InputError
 from .grid import Grid
 from .kernel import LENGTH, SIGMA0, sparse_kernel
-from .sensor import N_BEAMS, Z_MAX, BeamTable, in_field, relative, wrap_to_pi
+from .sensor import N_BEAMS, Z_MAX, BeamTable, in_field, relative
 
 PAIRS_PER_BLOCK = 1 << 21  # (cell, pose) pairs processed at once; bounds the working memory
 SAMPLE_STEP = 0.1          # default free-sample spacing along a beam [m] (= l / 2)
@@ -119,12 +119,14 @@ def count_evidence(grid: Grid, poses, scans, *, model: str = "discrete", semanti
         return acc.reshape(grid.n_cells, n_classes)
 
     for cell, pose, r, phi in _pairs(grid, poses, nearest_poses, z_max, progress):
-        k = table.nearest(pose, phi)
+        if model == "discrete":  # cells outside every beam's width get nothing
+            keep = table.may_reach(pose, phi, w_beam / 2)
+            cell, pose, r, phi = cell[keep], pose[keep], r[keep], phi[keep]
+        k, bearing_diff = table.nearest(pose, phi, return_diff=True)
         zk = table.ranges[k]
         if model == "discrete":
             half = w_obstacle / 2
-            outside = (r > np.minimum(z_max, zk + half)) | (
-                np.abs(wrap_to_pi(table.bearings[k] - phi)) > w_beam / 2)
+            outside = (r > np.minimum(z_max, zk + half)) | (bearing_diff > w_beam / 2)
             hit = ~outside & (zk < z_max) & (np.abs(r - zk) < half)
             passed = ~outside & ~hit & (r < zk) & (zk < z_max)
             add(cell[hit], cls_hit[k[hit]])
@@ -149,7 +151,7 @@ def _pairs(grid, poses, nearest_poses, z_max, progress):
     for s in starts:
         idx = np.arange(s, min(s + block, len(cells)))
         if tree is not None:
-            _, nn = tree.query(cells[idx], k=per_cell)
+            _, nn = tree.query(cells[idx], k=per_cell, workers=2)
             pose = nn.reshape(-1)
         else:
             pose = np.tile(np.arange(n_poses), len(idx))
@@ -203,7 +205,7 @@ def _all_beams(grid, poses, table, cls_hit, free, add, nearest_poses, z_max, sig
     n_poses, n_cells = len(poses), grid.n_cells
     selected = None
     if nearest_poses is not None:
-        _, nn = cKDTree(poses[:, :2]).query(grid.cells, k=min(nearest_poses, n_poses))
+        _, nn = cKDTree(poses[:, :2]).query(grid.cells, k=min(nearest_poses, n_poses), workers=2)
         nn = nn.reshape(n_cells, -1)
         order = np.argsort(nn.reshape(-1), kind="stable")
         by_pose = (order // nn.shape[1])  # cells, grouped by the pose they consider

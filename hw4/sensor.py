@@ -12,6 +12,7 @@ import numpy as np
 TWO_PI = 2.0 * np.pi
 Z_MAX = 30.0           # maximum range of the laser [m]
 N_BEAMS = 133          # the template's beam count; w_beam = 2 pi / N_BEAMS [rad]
+BINS = 4096            # bearing bins of the nearest-beam lookup table
 
 
 def wrap_to_pi(a):
@@ -20,8 +21,8 @@ def wrap_to_pi(a):
     ``np.remainder(a, 2 pi)`` lies in [0, 2 pi); values above pi are shifted down by 2 pi, so
     pi stays pi. Keeping the same floating-point steps keeps the nearest-beam choice identical.
     """
-    w = np.remainder(a, TWO_PI)
-    return np.where(np.abs(w) > np.pi, w - TWO_PI * np.sign(w), w)
+    w = np.remainder(a, TWO_PI)  # in [0, 2 pi): |w| > pi is w > pi, and sign(w) is 1 there
+    return np.where(w > np.pi, w - TWO_PI, w)
 
 
 def polar(scan) -> tuple:
@@ -45,6 +46,11 @@ def relative(cell_xy, pose) -> tuple:
 def in_field(r, phi, z_max: float = Z_MAX):
     """Template perceptual field: 0 < r < z_max and -pi < phi < pi (the laser sees all around)."""
     return (r > 0) & (r < z_max) & (phi > -np.pi) & (phi < np.pi)
+
+
+def _bin(theta):
+    """Bearing bin [0, BINS) of angles theta [rad] in [-pi, pi]; monotone in theta."""
+    return np.clip(np.floor((theta + np.pi) * (BINS / TWO_PI)).astype(np.int64), 0, BINS - 1)
 
 
 @dataclass
@@ -91,19 +97,52 @@ class BeamTable:
         self._key = key[self._sorted]
         seg = np.searchsorted(self.pose_of[self._sorted], np.arange(len(self.first)))
         self._seg_start, self._seg_len = seg[:-1], np.diff(seg)
+        # Bin table. With bin(theta) = floor((theta + pi) B / 2 pi), monotone in theta, a beam in
+        # a lower bin than phi lies below phi and one in a higher bin above it. Where every bin
+        # of a pose holds at most one bearing, the searchsorted position of phi is L or L + 1
+        # (L = bearings in lower bins), so the sorted neighbours L - 1, L, L + 1 are the only
+        # candidates. Poses with two bearings in one bin use binary search instead.
+        n_poses = len(self.first) - 1
+        pose_s = self.pose_of[self._sorted]
+        count = np.bincount(pose_s * BINS + _bin(self.bearings[self._sorted]),
+                            minlength=n_poses * BINS).reshape(n_poses, BINS)
+        self._bin_lo = (np.cumsum(count, axis=1) - count).astype(np.int32)
+        self._dense = np.any(count > 1, axis=1)
+        self.bearing_min = np.full(n_poses, np.inf)
+        self.bearing_max = np.full(n_poses, -np.inf)
+        np.minimum.at(self.bearing_min, self.pose_of, self.bearings)
+        np.maximum.at(self.bearing_max, self.pose_of, self.bearings)
 
-    def nearest(self, pose_idx, phi) -> np.ndarray:
+    def nearest(self, pose_idx, phi, return_diff: bool = False):
         """Global index of the beam of pose ``pose_idx`` nearest in bearing to ``phi`` [rad].
 
         Same choice as the template's ``nanargmin(|wrapToPI(theta - phi)|)``: the candidates are
         the sorted neighbours around phi (cyclically), compared with the same wrapped difference,
-        ties going to the smaller beam index.
+        ties going to the smaller beam index. With ``return_diff`` also returns that wrapped
+        bearing difference |wrapToPI(theta_k - phi)| [rad].
         """
         pose_idx = np.asarray(pose_idx)
+        phi = np.asarray(phi, dtype=float)
+        dense = self._dense[pose_idx]
+        if dense.any():
+            out = np.empty(len(pose_idx), dtype=np.int64)
+            diff = np.empty(len(pose_idx))
+            out[dense], diff[dense] = self._nearest(pose_idx[dense], phi[dense], exact=True)
+            out[~dense], diff[~dense] = self._nearest(pose_idx[~dense], phi[~dense], exact=False)
+        else:
+            out, diff = self._nearest(pose_idx, phi, exact=False)
+        return (out, diff) if return_diff else out
+
+    def _nearest(self, pose_idx, phi, exact):
         start, n = self._seg_start[pose_idx], self._seg_len[pose_idx]
-        pos = np.searchsorted(self._key, pose_idx * 8.0 + phi) - start
+        if exact:  # binary search; the float key may be off by one near a bearing: 4 candidates
+            pos = np.searchsorted(self._key, pose_idx * 8.0 + phi) - start
+            offsets = (-2, -1, 0, 1)
+        else:
+            pos = self._bin_lo[pose_idx, _bin(phi)]
+            offsets = (-1, 0, 1)
         best = best_d = None
-        for off in (-2, -1, 0, 1):
+        for off in offsets:
             cand = self._sorted[start + np.mod(pos + off, n)]
             d = np.abs(wrap_to_pi(self.bearings[cand] - phi))
             if best is None:
@@ -112,4 +151,16 @@ class BeamTable:
                 better = (d < best_d) | ((d == best_d) & (cand < best))
                 best = np.where(better, cand, best)
                 best_d = np.where(better, d, best_d)
-        return best
+        return best, best_d
+
+    def may_reach(self, pose_idx, phi, half_width) -> np.ndarray:
+        """False where no beam of the pose lies within ``half_width`` [rad] of bearing ``phi``.
+
+        A conservative pre-filter (true where unsure): a pose whose beams span [b_min, b_max]
+        without wrapping cannot have a beam within half_width of phi outside
+        [b_min - half_width, b_max + half_width].
+        """
+        lo = self.bearing_min[pose_idx] - half_width
+        hi = self.bearing_max[pose_idx] + half_width
+        wraps = (lo <= -np.pi + 1e-9) | (hi >= np.pi - 1e-9)
+        return wraps | ((phi >= lo - 1e-9) & (phi <= hi + 1e-9))

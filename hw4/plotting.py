@@ -1,0 +1,145 @@
+"""One look for every map in the book, the CLI and the notebooks.
+
+Maps are drawn in metres (world frame) with equal aspect, a colour bar, and a fixed palette:
+occupancy from white (free) to black (occupied) with unobserved cells at the prior's grey;
+variance in ``viridis``; semantic classes in the course's colours, free space white and
+unknown (no evidence) grey.
+"""
+from __future__ import annotations
+
+import numpy as np
+import matplotlib as mpl
+import matplotlib.pyplot as plt
+from matplotlib.colors import ListedColormap
+from matplotlib.patches import Patch
+
+CLASS_NAMES = ["north rooms", "west rooms", "east rooms", "south rooms", "middle rooms", "hallways"]
+CLASS_COLORS = np.array([[0.0, 0.447, 0.741], [0.850, 0.325, 0.098], [0.929, 0.694, 0.125],
+                         [0.494, 0.184, 0.556], [0.466, 0.674, 0.188], [0.301, 0.745, 0.933]])
+FREE_COLOR = np.array([1.0, 1.0, 1.0])
+UNKNOWN_COLOR = np.array([0.5, 0.5, 0.5])
+VARIANCE_CMAP = "viridis"
+OCCUPANCY_CMAP = "gray_r"
+
+
+def style():
+    """Set the book's matplotlib defaults (call once in a notebook's setup cell)."""
+    mpl.rcParams.update({
+        "figure.figsize": (6.0, 5.0), "figure.dpi": 100, "savefig.dpi": 120,
+        "savefig.bbox": "tight", "font.size": 10, "axes.titlesize": 11,
+        "image.interpolation": "nearest", "axes.grid": False,
+    })
+
+
+def _extent(grid):
+    h = grid.grid_size / 2
+    return (grid.x[0] - h, grid.x[-1] + h, grid.y[0] - h, grid.y[-1] + h)
+
+
+def _axes(ax, grid, title):
+    ax.set_xlabel("x [m]")
+    ax.set_ylabel("y [m]")
+    ax.set_aspect("equal")
+    ax.set_xlim(grid.range_x)
+    ax.set_ylim(grid.range_y)
+    if title:
+        ax.set_title(title)
+
+
+def _new(ax):
+    if ax is None:
+        _, ax = plt.subplots()
+    return ax
+
+
+def plot_mean(ogm, ax=None, title=None, colorbar=True):
+    """Occupancy probability E[theta] of a binary map: white free, black occupied, grey unknown."""
+    ax = _new(ax)
+    im = ax.imshow(ogm.grid.to_image(ogm.map["mean"]), origin="lower", extent=_extent(ogm.grid),
+                   cmap=OCCUPANCY_CMAP, vmin=0, vmax=1)
+    _axes(ax, ogm.grid, title)
+    if colorbar:
+        ax.figure.colorbar(im, ax=ax, shrink=0.8, label="P(occupied)")
+    return im
+
+
+def plot_variance(ogm, ax=None, title=None, vmax=None, colorbar=True):
+    """Posterior variance per cell (Beta variance, or that of the most likely class)."""
+    ax = _new(ax)
+    var = ogm.grid.to_image(ogm.map["variance"])
+    im = ax.imshow(var, origin="lower", extent=_extent(ogm.grid), cmap=VARIANCE_CMAP,
+                   vmin=0, vmax=vmax if vmax is not None else float(var.max()))
+    _axes(ax, ogm.grid, title)
+    if colorbar:
+        ax.figure.colorbar(im, ax=ax, shrink=0.8, label="variance")
+    return im
+
+
+def semantic_rgb(ogm) -> np.ndarray:
+    """(ny, nx, 3) colours of a semantic map: class colour, free white, no evidence grey."""
+    cls = np.argmax(ogm.map["alpha"], axis=1)
+    palette = np.vstack([CLASS_COLORS[: ogm.num_classes], FREE_COLOR])
+    rgb = palette[cls]
+    rgb[~ogm.observed] = UNKNOWN_COLOR
+    return rgb.reshape(ogm.grid.shape + (3,))
+
+
+def class_legend(ax, num_classes=6, loc="upper left", **kw):
+    """Legend naming the six regions, free space and unknown."""
+    handles = [Patch(color=CLASS_COLORS[i], label=CLASS_NAMES[i]) for i in range(num_classes)]
+    handles += [Patch(facecolor=FREE_COLOR, edgecolor="0.6", label="free"),
+                Patch(color=UNKNOWN_COLOR, label="unknown")]
+    return ax.legend(handles=handles, loc=loc, fontsize=7, framealpha=0.9, **kw)
+
+
+def plot_semantic(ogm, ax=None, title=None, legend=True):
+    """Most likely class per cell of a semantic map, with a legend naming the regions."""
+    ax = _new(ax)
+    im = ax.imshow(semantic_rgb(ogm), origin="lower", extent=_extent(ogm.grid))
+    _axes(ax, ogm.grid, title)
+    if legend:
+        class_legend(ax, ogm.num_classes)
+    return im
+
+
+def plot_map(ogm, ax=None, title=None, **kw):
+    """The map itself: class map for semantic models, occupancy probability otherwise."""
+    return (plot_semantic if ogm.semantic else plot_mean)(ogm, ax=ax, title=title, **kw)
+
+
+def plot_dataset(data, ax=None, every=3, title=None):
+    """Robot trajectory and scan end points in the world frame, coloured by label when present.
+
+    data : :class:`hw4.data.IntelData`; every : plot every n-th scan (keeps the figure light).
+    """
+    ax = _new(ax)
+    pts, labels = [], []
+    for (x, y, h), s in list(zip(data.poses, data.scans))[::every]:
+        c, sn = np.cos(h), np.sin(h)
+        pts.append(np.column_stack([x + c * s[0] - sn * s[1], y + sn * s[0] + c * s[1]]))
+        labels.append(s[2].astype(int) if s.shape[0] == 3 else np.zeros(s.shape[1], int))
+    pts, labels = np.concatenate(pts), np.concatenate(labels)
+    if data.semantic:
+        ax.scatter(pts[:, 0], pts[:, 1], s=0.3, c=CLASS_COLORS[labels - 1], linewidths=0,
+                   rasterized=True)
+        handles = [Patch(color=CLASS_COLORS[i], label=CLASS_NAMES[i]) for i in range(6)]
+    else:
+        ax.scatter(pts[:, 0], pts[:, 1], s=0.3, c="k", linewidths=0, rasterized=True)
+        handles = []
+    (line,) = ax.plot(data.poses[:, 0], data.poses[:, 1], "-", color="crimson", lw=0.8,
+                      label="robot path")
+    ax.legend(handles=handles + [line], loc="upper left", fontsize=7, framealpha=0.9)
+    ax.set_xlabel("x [m]")
+    ax.set_ylabel("y [m]")
+    ax.set_aspect("equal")
+    if title:
+        ax.set_title(title)
+    return ax
+
+
+def map_figure(ogm, title: str):
+    """A figure with the map (left) and its variance (right), as the CLI writes them."""
+    fig, (a, b) = plt.subplots(1, 2, figsize=(11, 4.8), constrained_layout=True)
+    plot_map(ogm, ax=a, title=f"{title}: mean")
+    plot_variance(ogm, ax=b, title=f"{title}: variance")
+    return fig
