@@ -132,8 +132,13 @@ def count_evidence(grid: Grid, poses, scans, *, model: str = "discrete", semanti
             add(cell[hit], cls_hit[k[hit]])
             add(cell[passed], np.full(passed.sum(), free))
         else:
-            _continuous_nearest(grid, poses, table, cls_hit, free, add, cell, pose, k,
-                                sigma0, l, sample_step)
+            # Every point of the beam lies at least r |sin(diff)| (r when diff >= pi/2) and
+            # r - z_k from the cell: pairs farther than l from the whole beam add nothing.
+            gap = np.maximum(np.where(bearing_diff < np.pi / 2, r * np.sin(bearing_diff), r),
+                             r - zk)
+            near = gap < l + 1e-9
+            _continuous_nearest(grid, poses, table, cls_hit, free, add, cell[near], pose[near],
+                                k[near], sigma0, l, sample_step)
     return acc.reshape(grid.n_cells, n_classes)
 
 

@@ -97,17 +97,18 @@ class BeamTable:
         self._key = key[self._sorted]
         seg = np.searchsorted(self.pose_of[self._sorted], np.arange(len(self.first)))
         self._seg_start, self._seg_len = seg[:-1], np.diff(seg)
-        # Bin table. With bin(theta) = floor((theta + pi) B / 2 pi), monotone in theta, a beam in
-        # a lower bin than phi lies below phi and one in a higher bin above it. Where every bin
-        # of a pose holds at most one bearing, the searchsorted position of phi is L or L + 1
-        # (L = bearings in lower bins), so the sorted neighbours L - 1, L, L + 1 are the only
-        # candidates. Poses with two bearings in one bin use binary search instead.
+        # Bin table. With bin(theta) = floor((theta + pi) B / 2 pi), monotone in theta, a bearing
+        # in a lower bin than phi lies below phi and one in a higher bin above it. Where every
+        # bin of a pose holds at most one bearing, the number of bearings below phi is
+        # L = (bearings in lower bins) plus one if the next sorted bearing is below phi: exact.
+        # Poses with two bearings in one bin use binary search instead.
         n_poses = len(self.first) - 1
         pose_s = self.pose_of[self._sorted]
         count = np.bincount(pose_s * BINS + _bin(self.bearings[self._sorted]),
                             minlength=n_poses * BINS).reshape(n_poses, BINS)
         self._bin_lo = (np.cumsum(count, axis=1) - count).astype(np.int32)
         self._dense = np.any(count > 1, axis=1)
+        self._sorted_bearing = np.append(self.bearings[self._sorted], np.inf)
         self.bearing_min = np.full(n_poses, np.inf)
         self.bearing_max = np.full(n_poses, -np.inf)
         np.minimum.at(self.bearing_min, self.pose_of, self.bearings)
@@ -138,9 +139,11 @@ class BeamTable:
         if exact:  # binary search; the float key may be off by one near a bearing: 4 candidates
             pos = np.searchsorted(self._key, pose_idx * 8.0 + phi) - start
             offsets = (-2, -1, 0, 1)
-        else:
+        else:  # exact position from the bin table: its two neighbours are the candidates
             pos = self._bin_lo[pose_idx, _bin(phi)]
-            offsets = (-1, 0, 1)
+            nxt = np.minimum(pos, n - 1)
+            pos = pos + ((pos < n) & (self._sorted_bearing[start + nxt] < phi))
+            offsets = (-1, 0)
         best = best_d = None
         for off in offsets:
             cand = self._sorted[start + np.mod(pos + off, n)]

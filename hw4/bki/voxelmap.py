@@ -31,6 +31,7 @@ B3 = B ** 3
 _SHIFT = 2               # log2(B)
 _OFF = np.int64(1 << 20)  # block index offset for packing; |block index| < 2^20
 _CHUNK_PAIRS = 1 << 21   # candidate (point, voxel) pairs handled at once (bounds temporary memory)
+_MAX_GRID = 1 << 23      # most blocks in one scan's scratch block grid
 
 UNKNOWN, FREE, OCCUPIED = 0, 1, 2
 METHODS = ("sbki", "scsm")
@@ -50,68 +51,39 @@ def _unpack(keys: np.ndarray) -> np.ndarray:
     return np.column_stack([(keys >> 42) & mask, (keys >> 21) & mask, keys & mask]) - _OFF
 
 
-def kernel_offsets(resolution: float, ell: float) -> np.ndarray:
-    """Voxel offsets ``o`` that can hold a centre within ``ell`` of a point in voxel ``0``.
+def kernel_reach(resolution: float, ell: float) -> int:
+    """Largest per-axis voxel offset ``R`` whose centre can lie within ``ell`` of a point.
 
     A point in voxel ``i`` sits at fraction ``f in [0, 1)`` of it per axis, so the centre of voxel
-    ``i + o`` is ``(o + 0.5 - f) r`` away along that axis, at least ``max(0, |o| - 0.5) r``. Offsets
-    whose smallest possible distance is below ``ell`` are kept (a superset of what any point needs).
-
-    Returns
-    -------
-    (M, 3) int64 array of offsets [voxels]
+    ``i + o`` is ``|o + 0.5 - f| r >= (|o| - 0.5) r`` away along that axis; only offsets with
+    ``|o| - 0.5 <= ell / r`` can matter, so ``R = floor(ell / r + 0.5)`` (inclusive: a superset; the
+    distance test ``d < ell`` decides).
     """
-    n = int(np.ceil(ell / resolution)) + 1
-    r = np.arange(-n, n + 1)
-    o = np.stack(np.meshgrid(r, r, r, indexing="ij"), axis=-1).reshape(-1, 3)
-    gap = np.maximum(np.abs(o) - 0.5, 0.0) * resolution
-    keep = (gap ** 2).sum(axis=1) < ell ** 2 * (1 + 1e-9)
-    return o[keep].astype(np.int64)
+    return int(np.floor(ell / resolution + 0.5))
 
 
-def contributions(points: np.ndarray, labels: np.ndarray, resolution: float, method: str,
-                  sf2: float = 10.0, ell: float = 0.3):
-    """Evidence that training points give to voxels: one row per (point, voxel) pair.
+def fast_kernel(d: np.ndarray, sf2: float, ell: float) -> np.ndarray:
+    """The sparse kernel of :func:`hw4.kernel.sparse_kernel` for ``d < ell``, computed in place.
+
+    Clamped at 0: just below ``ell`` the kernel is ``O((1 - d / ell)^5)`` and rounding can make it
+    slightly negative (the reference clamps too).
 
     Parameters
     ----------
-    points : (N, 3) float array [m], world frame
-    labels : (N,) int array, classes 0..K-1
-    resolution : float [m]
-    method : {"sbki", "scsm"}
-    sf2 : float
-        Kernel scale (value at distance 0) [evidence per point], S-BKI only.
-    ell : float [m]
-        Kernel length scale, S-BKI only.
-
-    Returns
-    -------
-    voxels : (P, 3) int64 array, voxel indices
-    classes : (P,) int64 array
-    weights : (P,) float array, evidence added (kernel value or 1)
+    d : (P,) float array [m], distances, all ``< ell`` (overwritten)
     """
-    if method == "scsm":
-        return (np.floor(points / resolution).astype(np.int64), labels.astype(np.int64),
-                np.ones(len(points)))
-    if method != "sbki":
-        raise InputError(f"unknown method {method!r}; use one of {', '.join(METHODS)}.")
-    offs = kernel_offsets(resolution, ell)
-    base = np.floor(points / resolution).astype(np.int64)
-    out_v, out_c, out_w = [], [], []
-    step = max(1, _CHUNK_PAIRS // len(offs))
-    for s in range(0, len(points), step):
-        p, b, lab = points[s:s + step], base[s:s + step], labels[s:s + step]
-        vox = b[:, None, :] + offs[None, :, :]                       # (n, M, 3)
-        diff = p[:, None, :] - (vox + 0.5) * resolution
-        d = np.sqrt(np.einsum("nmi,nmi->nm", diff, diff))
-        pi, mi = np.nonzero(d < ell)
-        w = np.maximum(sparse_kernel(d[pi, mi], sigma0=sf2, l=ell), 0.0)
-        out_v.append(vox[pi, mi])
-        out_c.append(lab[pi].astype(np.int64))
-        out_w.append(w)
-    if not out_v:
-        return np.zeros((0, 3), np.int64), np.zeros(0, np.int64), np.zeros(0)
-    return np.concatenate(out_v), np.concatenate(out_c), np.concatenate(out_w)
+    t = np.multiply(d, 2.0 * np.pi / ell)
+    c = np.cos(t)
+    c += 2.0
+    np.multiply(d, -1.0 / (3.0 * ell), out=d)
+    d += 1.0 / 3.0
+    c *= d
+    np.sin(t, out=t)
+    t *= 1.0 / (2.0 * np.pi)
+    c += t
+    c *= sf2
+    np.maximum(c, 0.0, out=c)
+    return c
 
 
 @dataclass
@@ -135,6 +107,9 @@ class MapView:
     state_reference : (M,) int array
         The reference implementation's state, which ignores ``var_thresh``: FREE or OCCUPIED by
         ``cls`` alone.
+    count : (M,) int array
+        Number of training points that reached each voxel (within ``ell`` for S-BKI, inside it for
+        S-CSM), summed over scans.
     resolution : float [m]
     """
 
@@ -145,6 +120,7 @@ class MapView:
     variance: np.ndarray
     state: np.ndarray
     state_reference: np.ndarray
+    count: np.ndarray
     resolution: float
 
     def __len__(self) -> int:
@@ -189,7 +165,9 @@ class VoxelMap:
         self.sf2, self.ell, self.prior, self.var_thresh = float(sf2), float(ell), float(prior), float(var_thresh)
         self.keys = np.zeros(0, np.int64)    # sorted block keys
         self.slots = np.zeros(0, np.int64)   # pool slot of each key
-        self.pool = np.zeros((16, B3, self.num_class))  # evidence e_k (prior excluded)
+        # per block and voxel: evidence e_0 .. e_{K-1} (prior excluded), then the number of
+        # training points that reached the voxel (decides "has evidence", free of rounding)
+        self.pool = np.zeros((16, B3, self.num_class + 1))
         self.n_blocks = 0
         self.n_scans = 0
 
@@ -203,35 +181,90 @@ class VoxelMap:
         labels : (N,) int array, classes ``0 .. K - 1``
         """
         points = np.asarray(points, dtype=float)
-        labels = np.asarray(labels)
+        labels = np.asarray(labels).astype(np.int64)
+        if points.ndim != 2 or points.shape[1] != 3 or labels.shape != (len(points),):
+            raise InputError(f"training points must be (N, 3) with N labels; got {points.shape} "
+                             f"and {labels.shape}.")
         if len(points) and (labels.min() < 0 or labels.max() >= self.num_class):
             raise InputError(f"a training label lies outside 0..{self.num_class - 1}.")
-        vox, cls, w = contributions(points, labels, self.resolution, self.method, self.sf2, self.ell)
+        if not np.all(np.isfinite(points)):
+            raise InputError("a training point has a NaN or infinite coordinate.")
         self.n_scans += 1
-        if len(vox):
-            self._accumulate(vox, cls, w)
+        if len(points) == 0:
+            return
+        base = np.floor(points / self.resolution).astype(np.int64)
+        R = 0 if self.method == "scsm" else kernel_reach(self.resolution, self.ell)
+        lo = (base.min(axis=0) - R) >> _SHIFT
+        dims = ((base.max(axis=0) + R) >> _SHIFT) - lo + 1
+        _pack(np.array([lo, lo + dims - 1]))  # range check of the block keys
+        n_grid = int(np.prod(dims.astype(np.int64)))
+        if n_grid > _MAX_GRID:  # a very spread-out scan: split it along x and recurse
+            order = np.argsort(base[:, 0], kind="stable")
+            half = len(order) // 2
+            if half == 0:
+                raise InputError("a single training point spans too many blocks; check resolution.")
+            self.n_scans -= 2
+            self.update(points[order[:half]], labels[order[:half]])
+            self.update(points[order[half:]], labels[order[half:]])
+            return
+        if self.method == "scsm":
+            code = self._codes(base, lo, dims, np.zeros(1, np.int64)).sum(axis=1)[:, 0]
+            cls, w = labels, np.ones(len(points))
+        else:
+            code, cls, w = self._kernel_pairs(points, labels, base, lo, dims, R)
+        self._accumulate(code, cls, w, lo, dims)
 
-    def _accumulate(self, vox: np.ndarray, cls: np.ndarray, w: np.ndarray) -> None:
-        blk = vox >> _SHIFT
-        local = ((vox[:, 0] & (B - 1)) * B + (vox[:, 1] & (B - 1))) * B + (vox[:, 2] & (B - 1))
-        lo = blk.min(axis=0)
-        dims = blk.max(axis=0) - lo + 1
-        if np.prod(dims.astype(float)) <= 1 << 23:  # dense scratch grid over the scan's blocks
-            flat = np.ravel_multi_index((blk - lo).T, dims)
-            seen = np.bincount(flat, minlength=int(np.prod(dims))) > 0
-            touched_flat = np.flatnonzero(seen)
-            rank_of = np.cumsum(seen) - 1
-            rank = rank_of[flat]
-            touched = np.column_stack(np.unravel_index(touched_flat, dims)) + lo
-        else:  # very spread-out scan: sort instead
-            keys = _pack(blk)
-            uk, rank = np.unique(keys, return_inverse=True)
-            touched = _unpack(uk)
-        tkeys = _pack(touched)  # sorted: lexicographic order = raveled order
-        T, K = len(tkeys), self.num_class
-        add = np.bincount((rank * B3 + local) * K + cls, weights=w, minlength=T * B3 * K)
-        slots = self._slots_for(tkeys)  # may grow (replace) the pool: look it up afterwards
-        self.pool[slots] += add.reshape(T, B3, K)
+    def _codes(self, base, lo, dims, o):
+        """Per point and per-axis offset, the separable parts of ``block_id * 64 + local``.
+
+        Returns (n, 3, len(o)) int64; the code of offset ``(ox, oy, oz)`` is the sum of the three
+        axis parts, where ``block_id`` is the raveled index of the block in the scan's block grid
+        (origin ``lo``, shape ``dims``) and ``local`` the raveled index of the voxel in its block.
+        """
+        v = base[:, :, None] + o[None, None, :]                     # (n, 3, m) voxel index
+        blk = (v >> _SHIFT) - lo[None, :, None]
+        loc = v & (B - 1)
+        stride_b = np.array([dims[1] * dims[2], dims[2], 1], np.int64)
+        stride_l = np.array([B * B, B, 1], np.int64)
+        return blk * (stride_b * B3)[None, :, None] + loc * stride_l[None, :, None]
+
+    def _kernel_pairs(self, points, labels, base, lo, dims, R):
+        """All (training point, voxel) pairs with centre distance < ell: codes, classes, weights."""
+        o = np.arange(-R, R + 1, dtype=np.int64)
+        m = len(o)
+        ell2 = self.ell ** 2
+        step = max(1, _CHUNK_PAIRS // m ** 3)
+        out_code, out_cls, out_w = [], [], []
+        for s in range(0, len(points), step):
+            p, b = points[s:s + step], base[s:s + step]
+            diff = p[:, :, None] - (b[:, :, None] + (o + 0.5)[None, None, :]) * self.resolution
+            sq = diff * diff                                            # (n, 3, m)
+            d2 = (sq[:, 0, :, None, None] + sq[:, 1, None, :, None]) + sq[:, 2, None, None, :]
+            idx = np.flatnonzero(d2 < ell2)
+            parts = self._codes(b, lo, dims, o)
+            code = (parts[:, 0, :, None, None] + parts[:, 1, None, :, None]) + parts[:, 2, None, None, :]
+            out_code.append(code.reshape(-1)[idx])
+            out_cls.append(labels[s:s + step][idx // m ** 3])
+            out_w.append(fast_kernel(np.sqrt(d2.reshape(-1)[idx]), self.sf2, self.ell))
+        if len(out_code) == 1:
+            return out_code[0], out_cls[0], out_w[0]
+        return np.concatenate(out_code), np.concatenate(out_cls), np.concatenate(out_w)
+
+    def _accumulate(self, code, cls, w, lo, dims) -> None:
+        """Sum the pairs' evidence per (voxel, class) and add it to the map's blocks."""
+        n_grid = int(np.prod(dims.astype(np.int64)))
+        blk = code >> 6
+        seen = np.bincount(blk, minlength=n_grid) > 0
+        touched = np.flatnonzero(seen)
+        rank = (np.cumsum(seen) - 1)[blk]
+        T, K = len(touched), self.num_class
+        vox = rank * B3 + (code & (B3 - 1))
+        add = np.empty((T, B3, K + 1))
+        add[:, :, :K] = np.bincount(vox * K + cls, weights=w, minlength=T * B3 * K).reshape(T, B3, K)
+        add[:, :, K] = np.bincount(vox, minlength=T * B3).reshape(T, B3)
+        coords = np.column_stack(np.unravel_index(touched, tuple(int(x) for x in dims))) + lo
+        slots = self._slots_for(_pack(coords))  # may grow (replace) the pool: look it up afterwards
+        self.pool[slots] += add
 
     def _slots_for(self, tkeys: np.ndarray) -> np.ndarray:
         """Pool slots of the sorted block keys ``tkeys``, allocating the new ones."""
@@ -249,7 +282,7 @@ class VoxelMap:
             need = first + n_new
             if need > len(self.pool):
                 cap = max(need, len(self.pool) + len(self.pool) // 2)
-                grown = np.zeros((cap, B3, self.num_class))
+                grown = np.zeros((cap, B3, self.num_class + 1))
                 grown[:first] = self.pool[:first]
                 self.pool = grown
             self.keys = np.insert(self.keys, pos[new], tkeys[new])
@@ -270,17 +303,18 @@ class VoxelMap:
         -------
         voxels : (M, 3) int64 array, voxel indices
         e : (M, K) float array, evidence per class (prior excluded)
+        n : (M,) int array, number of training points that reached each voxel (>= 1)
         """
-        ev = self.pool[self.slots].reshape(-1, self.num_class)
-        has = ev.sum(axis=1) > 0
+        ev = self.pool[self.slots].reshape(-1, self.num_class + 1)
+        has = ev[:, -1] > 0
         loc = np.arange(B3)
         local = np.column_stack([loc // (B * B), (loc // B) % B, loc % B])
         vox = (_unpack(self.keys)[:, None, :] * B + local[None, :, :]).reshape(-1, 3)
-        return vox[has], ev[has]
+        return vox[has], ev[has, :-1], ev[has, -1].astype(np.int64)
 
     def view(self) -> MapView:
         """Posterior of every voxel with evidence (see :class:`MapView`)."""
-        vox, ev = self.evidence()
+        vox, ev, count = self.evidence()
         alpha = ev + self.prior
         total = alpha.sum(axis=1)
         probs = alpha / total[:, None]
@@ -289,5 +323,5 @@ class VoxelMap:
         var = p * (1 - p) / (total + 1)
         ref = np.where(cls == 0, FREE, OCCUPIED)
         state = np.where(var > self.var_thresh, UNKNOWN, ref)
-        return MapView((vox + 0.5) * self.resolution, alpha, probs, cls, var, state, ref,
+        return MapView((vox + 0.5) * self.resolution, alpha, probs, cls, var, state, ref, count,
                        self.resolution)

@@ -1,0 +1,37 @@
+"""Command line: ``python -m hw4 {run,data,bki,package} ...`` (``--help`` on each)."""
+from __future__ import annotations
+
+import argparse
+import sys
+
+from .errors import InputError
+
+
+def parser() -> argparse.ArgumentParser:
+    from . import cli, package
+    from .bki import cli as bki_cli
+    p = argparse.ArgumentParser(
+        prog="python -m hw4",
+        description="Mapping with counting sensor models (NA 568 HW4): build the maps of tasks "
+                    "1-4, run 3D semantic BKI (task 5), fetch data, package a submission.")
+    sub = p.add_subparsers(dest="command", metavar="COMMAND", required=True)
+    cli.register(sub)
+    bki_cli.register(sub)
+    package.register(sub)
+    return p
+
+
+def main(argv=None) -> int:
+    args = parser().parse_args(argv)
+    try:
+        return int(args.func(args) or 0)
+    except InputError as e:
+        print(f"error: {e}", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        print("interrupted", file=sys.stderr)
+        return 130
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,218 @@
+"""Reader for a SemanticKITTI sequence folder: scans, labels, poses and calibration.
+
+Layout of ``sequences/NN/`` (http://www.semantic-kitti.org/dataset.html):
+
+* ``velodyne/000000.bin`` -- float32 ``x, y, z, remission`` per point [m], velodyne frame;
+* ``labels/000000.label`` (or a folder of predictions) -- uint32 per point, the semantic id in the
+  low 16 bits and the instance id in the high 16 bits;
+* ``poses.txt`` -- one 3x4 row-major matrix per scan: the pose ``P_t`` of the left camera of scan
+  ``t`` in the frame of the camera of scan 0;
+* ``calib.txt`` -- the line ``Tr:`` (3x4 row-major): velodyne -> left camera.
+
+As in SemanticKITTI's own tools, the velodyne pose of scan ``t`` in the world frame (the velodyne
+frame of scan 0, z up) is ``inv(Tr) @ P_t @ Tr``; the sensor origin is its translation. Raw ids are
+mapped to the 19 training classes plus class 0 (unlabeled) with the dataset's ``learning_map``, and
+classes get the dataset's colours (converted from the yaml's BGR to RGB).
+"""
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from ..errors import InputError
+from .scan import Scan
+
+CLASS_NAMES = ("free", "car", "bicycle", "motorcycle", "truck", "other-vehicle", "person",
+               "bicyclist", "motorcyclist", "road", "parking", "sidewalk", "other-ground",
+               "building", "fence", "vegetation", "trunk", "terrain", "pole", "traffic-sign")
+"""Map classes: 0 is free space in the map (SemanticKITTI's 'unlabeled', dropped from hits)."""
+
+LEARNING_MAP = {0: 0, 1: 0, 10: 1, 11: 2, 13: 5, 15: 3, 16: 5, 18: 4, 20: 5, 30: 6, 31: 7, 32: 8,
+                40: 9, 44: 10, 48: 11, 49: 12, 50: 13, 51: 14, 52: 0, 60: 9, 70: 15, 71: 16, 72: 17,
+                80: 18, 81: 19, 99: 0, 252: 1, 253: 7, 254: 6, 255: 8, 256: 5, 257: 5, 258: 4, 259: 5}
+"""SemanticKITTI ``learning_map``: raw semantic id -> training class 0..19."""
+
+_COLOR_BGR = {0: (0, 0, 0), 10: (245, 150, 100), 11: (245, 230, 100), 15: (150, 60, 30),
+              18: (180, 30, 80), 20: (255, 0, 0), 30: (30, 30, 255), 31: (200, 40, 255),
+              32: (90, 30, 150), 40: (255, 0, 255), 44: (255, 150, 255), 48: (75, 0, 75),
+              49: (75, 0, 175), 50: (0, 200, 255), 51: (50, 120, 255), 70: (0, 175, 0),
+              71: (0, 60, 135), 72: (80, 240, 150), 80: (150, 240, 255), 81: (0, 0, 255)}
+_LEARNING_MAP_INV = (0, 10, 11, 15, 18, 20, 30, 31, 32, 40, 44, 48, 49, 50, 51, 70, 71, 72, 80, 81)
+
+COLORS = np.array([_COLOR_BGR[r][::-1] for r in _LEARNING_MAP_INV], dtype=np.uint8)
+"""(20, 3) uint8 RGB colour of each training class (SemanticKITTI's palette)."""
+
+_LUT = np.full(1 << 16, -1, dtype=np.int64)
+for _raw, _cls in LEARNING_MAP.items():
+    _LUT[_raw] = _cls
+
+
+def learning_labels(raw: np.ndarray, name: str = "labels") -> np.ndarray:
+    """Map raw uint32 labels (semantic id in the low 16 bits) to training classes 0..19.
+
+    Raises :class:`InputError` for a semantic id that SemanticKITTI does not define.
+    """
+    sem = np.asarray(raw, dtype=np.uint32) & 0xFFFF
+    cls = _LUT[sem]
+    if np.any(cls < 0):
+        bad = int(sem[cls < 0][0])
+        raise InputError(f"{name} holds semantic id {bad}, which is not a SemanticKITTI label id "
+                         "(not in its learning_map); is this a .label file?")
+    return cls
+
+
+def _matrix_rows(text: str, name: str) -> np.ndarray:
+    try:
+        vals = [[float(v) for v in ln.split()] for ln in text.splitlines() if ln.strip()]
+    except ValueError:
+        raise InputError(f"{name} holds a value that is not a number.") from None
+    if not vals or any(len(v) != 12 for v in vals):
+        raise InputError(f"{name} must hold one 3x4 matrix (12 numbers) per line.")
+    m = np.array(vals).reshape(-1, 3, 4)
+    out = np.tile(np.eye(4), (len(m), 1, 1))
+    out[:, :3, :] = m
+    return out
+
+
+def check_rigid(T: np.ndarray, name: str, tol: float = 1e-4) -> None:
+    """Raise :class:`InputError` unless ``T`` (4, 4) is a finite rigid transform (rotation + translation).
+
+    ``tol`` bounds ``|R^T R - I|`` (the published poses are rounded to about 1e-9 relative).
+    """
+    if not np.all(np.isfinite(T)):
+        raise InputError(f"{name} contains NaN or infinite values.")
+    R = T[:3, :3]
+    err = np.abs(R.T @ R - np.eye(3)).max()
+    if err > tol or np.linalg.det(R) < 0:
+        raise InputError(f"{name} is not a rigid transform (its 3x3 part is not a rotation: "
+                         f"|R^T R - I| = {err:.2g}, det = {np.linalg.det(R):.3g}).")
+
+
+def read_calib(path) -> np.ndarray:
+    """Read ``Tr`` (velodyne -> left camera) from ``calib.txt`` as a (4, 4) array."""
+    path = Path(path)
+    try:
+        lines = path.read_text().splitlines()
+    except OSError as e:
+        raise InputError(f"cannot read {path} ({e.strerror}).") from None
+    rows = [ln.split(":", 1)[1] for ln in lines if ln.split(":", 1)[0].strip() == "Tr"]
+    if not rows:
+        raise InputError(f"{path} has no 'Tr:' line (velodyne -> camera calibration).")
+    Tr = _matrix_rows(rows[0], f"{path} (Tr)")[0]
+    check_rigid(Tr, f"the Tr calibration in {path}")
+    return Tr
+
+
+def read_poses(path) -> np.ndarray:
+    """Read ``poses.txt``: (T, 4, 4) camera poses, camera frame of scan 0. Each must be rigid."""
+    path = Path(path)
+    try:
+        text = path.read_text()
+    except OSError as e:
+        raise InputError(f"cannot read {path} ({e.strerror}).") from None
+    P = _matrix_rows(text, str(path))
+    for t, T in enumerate(P):
+        check_rigid(T, f"pose {t} (line {t + 1}) of {path}")
+    return P
+
+
+def velodyne_poses(P: np.ndarray, Tr: np.ndarray) -> np.ndarray:
+    """Velodyne poses in the world frame (velodyne frame of scan 0): ``inv(Tr) @ P_t @ Tr``.
+
+    Parameters
+    ----------
+    P : (T, 4, 4) camera poses, camera frame of scan 0
+    Tr : (4, 4) velodyne -> camera
+
+    Returns
+    -------
+    (T, 4, 4) array mapping velodyne coordinates of scan t [m] to world coordinates [m]
+    """
+    return np.linalg.inv(Tr)[None] @ P @ Tr[None]
+
+
+def read_bin(path) -> np.ndarray:
+    """Read a velodyne ``.bin``: (N, 4) float32 ``x, y, z`` [m] (velodyne frame) and remission."""
+    path = Path(path)
+    try:
+        raw = path.read_bytes()
+    except OSError as e:
+        raise InputError(f"cannot read {path} ({e.strerror}).") from None
+    if len(raw) % 16:
+        raise InputError(f"{path} has {len(raw)} bytes, not a multiple of 16 (4 float32 per point): "
+                         "the file is truncated or not a velodyne scan.")
+    return np.frombuffer(raw, dtype="<f4").reshape(-1, 4)
+
+
+def read_label(path) -> np.ndarray:
+    """Read a ``.label`` file: (N,) uint32 raw labels."""
+    path = Path(path)
+    try:
+        raw = path.read_bytes()
+    except OSError as e:
+        raise InputError(f"cannot read {path} ({e.strerror}).") from None
+    if len(raw) % 4:
+        raise InputError(f"{path} has {len(raw)} bytes, not a multiple of 4 (one uint32 per point).")
+    return np.frombuffer(raw, dtype="<u4")
+
+
+class SemanticKITTISequence:
+    """A SemanticKITTI sequence folder, read scan by scan (streaming).
+
+    Parameters
+    ----------
+    folder : str or Path
+        The sequence folder, e.g. ``.../dataset/sequences/04``, with ``velodyne/``, the label
+        folder, ``poses.txt`` and ``calib.txt``.
+    labels : str
+        Name of the label folder (``labels`` for ground truth, ``predictions`` for network output;
+        either way raw SemanticKITTI ids).
+    """
+
+    def __init__(self, folder, labels: str = "labels"):
+        self.folder = Path(folder)
+        if not self.folder.is_dir():
+            raise InputError(f"{self.folder} is not a folder; give a SemanticKITTI sequence folder "
+                             "such as dataset/sequences/04.")
+        vel = self.folder / "velodyne"
+        self.bins = sorted(vel.glob("*.bin")) if vel.is_dir() else []
+        if not self.bins:
+            raise InputError(f"{vel} holds no .bin scans; is {self.folder} a SemanticKITTI sequence folder?")
+        self.label_dir = self.folder / labels
+        if not self.label_dir.is_dir():
+            raise InputError(f"{self.label_dir} is missing: the scans need per-point labels "
+                             "(labels/ or predictions/).")
+        self.poses = velodyne_poses(read_poses(self.folder / "poses.txt"),
+                                    read_calib(self.folder / "calib.txt"))
+        if len(self.poses) < len(self.bins):
+            raise InputError(f"{self.folder / 'poses.txt'} has {len(self.poses)} poses for "
+                             f"{len(self.bins)} scans; each scan needs a pose.")
+
+    def __len__(self) -> int:
+        return len(self.bins)
+
+    def scan(self, t: int) -> Scan:
+        """Scan ``t`` in the world frame, hits of class 0 (unlabeled, outlier, ...) dropped.
+
+        Returns
+        -------
+        Scan
+            Points [m] and origin [m] in the world frame (velodyne frame of scan 0); labels 1..19.
+        """
+        b = self.bins[t]
+        lab_path = self.label_dir / (b.stem + ".label")
+        pts = read_bin(b)
+        raw = read_label(lab_path)
+        if len(raw) != len(pts):
+            raise InputError(f"{lab_path.name} has {len(raw)} labels for the {len(pts)} points of "
+                             f"{b.name}; they must match one to one.")
+        cls = learning_labels(raw, str(lab_path))
+        i = int(b.stem) if b.stem.isdigit() else t  # scan NNNNNN has the pose on line NNNNNN
+        if i >= len(self.poses):
+            raise InputError(f"{b.name} has no pose: {self.folder / 'poses.txt'} has {len(self.poses)} lines.")
+        T = self.poses[i]
+        keep = cls > 0
+        xyz = pts[keep, :3].astype(float)
+        world = xyz @ T[:3, :3].T + T[:3, 3]
+        return Scan(world, cls[keep], T[:3, 3].copy(), b.name)

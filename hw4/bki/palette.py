@@ -1,0 +1,36 @@
+"""Class colours of the 3D maps (RGB, uint8): the toy example's and SemanticKITTI's."""
+from __future__ import annotations
+
+import numpy as np
+
+from .kitti import CLASS_NAMES as KITTI_NAMES
+from .kitti import COLORS as KITTI_COLORS
+
+TOY_COLORS = np.array([[255, 255, 255],   # 0 free (white, never drawn as a voxel)
+                       [255, 0, 0],       # 1 (the reference's rviz colours)
+                       [70, 130, 180],    # 2
+                       [218, 112, 214]],  # 3
+                      dtype=np.uint8)
+TOY_NAMES = ("free", "class 1", "class 2", "class 3")
+
+
+def class_colors(num_class: int) -> np.ndarray:
+    """(num_class, 3) uint8 RGB colours: SemanticKITTI's for 20 classes, else the toy palette
+    extended with matplotlib's tab10."""
+    if num_class == len(KITTI_COLORS):
+        return KITTI_COLORS.copy()
+    out = np.zeros((num_class, 3), np.uint8)
+    n = min(num_class, len(TOY_COLORS))
+    out[:n] = TOY_COLORS[:n]
+    if num_class > n:
+        from matplotlib import colormaps
+        tab = (np.array(colormaps["tab10"].colors) * 255).round().astype(np.uint8)
+        out[n:] = tab[np.arange(num_class - n) % 10]
+    return out
+
+
+def class_names(num_class: int) -> tuple:
+    """Names of the classes (free first)."""
+    if num_class == len(KITTI_NAMES):
+        return KITTI_NAMES
+    return tuple(TOY_NAMES[i] if i < len(TOY_NAMES) else f"class {i}" for i in range(num_class))

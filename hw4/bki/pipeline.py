@@ -1,0 +1,111 @@
+"""The mapping loop: scans from a dataset -> training data -> incremental voxel-map updates.
+
+:func:`scan_source` turns a dataset name and folder into a list of scan loaders (read lazily, so a
+long SemanticKITTI sequence streams scan by scan); :func:`map_scans` inserts them one after another
+and yields after each, so callers can draw the growing map or show progress.
+"""
+from __future__ import annotations
+
+import re
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Callable, Iterator
+
+from ..errors import InputError
+from .config import BKIConfig
+from .kitti import SemanticKITTISequence
+from .pcd import read_labelled_scan
+from .scan import Scan, validate_scan
+from .training import TrainingData, training_data
+from .voxelmap import VoxelMap
+
+
+def _natural(p: Path):
+    return [int(t) if t.isdigit() else t for t in re.split(r"(\d+)", p.name)]
+
+
+def toy_paths(folder=None) -> list[Path]:
+    """The labelled PCD scans of a folder in natural order (``..._2.pcd`` before ``..._10.pcd``).
+
+    Without ``folder``, the 12 toy scans made present and verified by :mod:`hw4.data`.
+    """
+    if folder is None:
+        from ..data import ensure_all
+        return sorted(ensure_all("bki_toy/"), key=_natural)
+    folder = Path(folder)
+    if folder.is_file():
+        return [folder]
+    if not folder.is_dir():
+        raise InputError(f"{folder} is neither a PCD file nor a folder of PCD files.")
+    paths = sorted(folder.glob("*.pcd"), key=_natural)
+    if not paths:
+        raise InputError(f"{folder} holds no .pcd files.")
+    return paths
+
+
+def scan_source(dataset: str, path=None, cfg: BKIConfig | None = None) -> list[Callable[[], Scan]]:
+    """Loaders of the scans of a dataset, in mapping order.
+
+    Parameters
+    ----------
+    dataset : {"toy", "semantickitti"}
+    path : str or Path, optional
+        Folder of PCD scans (toy) or a SemanticKITTI sequence folder; by default the verified toy
+        scans or the one-frame SemanticKITTI sample of :mod:`hw4.data`.
+    cfg : BKIConfig, optional
+        Supplies the SemanticKITTI label folder.
+    """
+    if dataset == "toy":
+        return [lambda p=p: read_labelled_scan(p) for p in toy_paths(path)]
+    if dataset == "semantickitti":
+        if path is None:
+            from ..data import ensure_all
+            path = ensure_all("semantickitti_sample/")[0].parent
+        seq = SemanticKITTISequence(path, labels=(cfg.labels if cfg else "labels"))
+        return [lambda t=t: seq.scan(t) for t in range(len(seq))]
+    raise InputError(f"unknown dataset {dataset!r}; use toy or semantickitti.")
+
+
+@dataclass
+class Step:
+    """What :func:`map_scans` yields after inserting one scan."""
+
+    index: int
+    scan: Scan
+    training: TrainingData
+    map: VoxelMap
+
+
+def new_map(cfg: BKIConfig, method: str) -> VoxelMap:
+    """An empty voxel map with the settings of ``cfg``."""
+    return VoxelMap(cfg.resolution, cfg.num_class, method, cfg.sf2, cfg.ell, cfg.prior, cfg.var_thresh)
+
+
+def map_scans(loaders, cfg: BKIConfig, method: str = "sbki",
+              vmap: VoxelMap | None = None) -> Iterator[Step]:
+    """Insert scans one after another; yield a :class:`Step` after each.
+
+    Parameters
+    ----------
+    loaders : sequence of callables returning :class:`~hw4.bki.scan.Scan`
+    cfg : BKIConfig
+    method : {"sbki", "scsm"}
+    vmap : VoxelMap, optional
+        Map to extend (default: a new one).
+    """
+    vmap = vmap if vmap is not None else new_map(cfg, method)
+    for i, load in enumerate(loaders):
+        scan = validate_scan(load(), cfg.num_class)
+        td = training_data(scan, cfg.ds_resolution, cfg.free_resolution, cfg.max_range, cfg.num_class)
+        vmap.update(td.points, td.labels)
+        yield Step(i, scan, td, vmap)
+
+
+def build_map(loaders, cfg: BKIConfig, method: str = "sbki") -> tuple[VoxelMap, int, int]:
+    """Insert every scan; return the map and the total numbers of training hits and free points."""
+    hits = free = 0
+    vmap = new_map(cfg, method)
+    for step in map_scans(loaders, cfg, method, vmap):
+        hits += step.training.n_hits
+        free += step.training.n_free
+    return vmap, hits, free
