@@ -150,7 +150,7 @@ def _pairs(grid, poses, nearest_poses, z_max, progress):
     block = max(1, PAIRS_PER_BLOCK // per_cell)
     tree = cKDTree(poses[:, :2]) if nearest_poses is not None else None
     starts = range(0, len(cells), block)
-    if progress:
+    if progress and len(starts) > 1:
         from tqdm import tqdm
         starts = tqdm(starts, desc="cells", unit="block", leave=False)
     for s in starts:
