@@ -22,7 +22,6 @@ class BKIConfig:
     sf2, prior, var_thresh : float
     scans : int (0 = all)
     labels : str (SemanticKITTI label folder)
-    drop_unlabeled : bool (SemanticKITTI: drop hits of class 0)
     """
 
     resolution: float = 0.1
@@ -36,7 +35,6 @@ class BKIConfig:
     var_thresh: float = 0.09
     scans: int = 0
     labels: str = "labels"
-    drop_unlabeled: bool = True
 
     def with_(self, **kw) -> "BKIConfig":
         """A copy with some settings changed."""

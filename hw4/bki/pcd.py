@@ -150,7 +150,7 @@ def read_pcd(path) -> PCD:
         cols = {f: arr[f].copy() for f, _, _ in dtypes}
     elif kind == "binary_compressed":
         raise InputError(f"{name}: DATA binary_compressed (LZF) PCD files are not supported; convert "
-                         "to ascii or binary first (e.g. pcl_convert_pcd_ascii_binary).")
+                         "to ascii or binary first with pcl_convert_pcd_ascii_binary.")
     else:
         raise InputError(f"{name}: unknown PCD DATA kind {kind!r}; expected ascii or binary.")
     return PCD(cols, viewpoint, kind, header)

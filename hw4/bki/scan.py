@@ -68,6 +68,6 @@ def validate_scan(scan: Scan, num_class: int) -> Scan:
     bad = ~np.isfinite(labf) | (labf != np.round(labf)) | (labf < 1) | (labf > num_class - 1)
     if bad.any():
         i = int(np.flatnonzero(bad)[0])
-        raise InputError(f"{scan.name}: point {i} has label {lab[i]!r}, outside the map's classes "
+        raise InputError(f"{scan.name}: point {i} has label {labf[i]:g}, outside the map's classes "
                          f"1..{num_class - 1} (0 is free space); check num_class in the config.")
     return Scan(pts, labf.astype(np.int64), org, scan.name)

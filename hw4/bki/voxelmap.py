@@ -24,7 +24,6 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import InputError
-from ..kernel import sparse_kernel
 
 B = 4                    # block edge [voxels]
 B3 = B ** 3
@@ -253,7 +252,7 @@ class VoxelMap:
     def _accumulate(self, code, cls, w, lo, dims) -> None:
         """Sum the pairs' evidence per (voxel, class) and add it to the map's blocks."""
         n_grid = int(np.prod(dims.astype(np.int64)))
-        blk = code >> 6
+        blk = code >> (3 * _SHIFT)  # code = block_id * B^3 + local
         seen = np.bincount(blk, minlength=n_grid) > 0
         touched = np.flatnonzero(seen)
         rank = (np.cumsum(seen) - 1)[blk]

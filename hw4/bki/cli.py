@@ -1,0 +1,135 @@
+"""``python -m hw4 bki``: map a labelled scan sequence and write the map, figures and video.
+
+The lead's ``hw4/__main__.py`` calls :func:`register` on its subparsers; ``python -m hw4.bki``
+runs the same command on its own.
+"""
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+
+from ..errors import InputError
+from .config import DATASETS, load_config
+from .voxelmap import METHODS
+
+DESCRIPTION = """\
+Build a 3D semantic voxel map from a sequence of labelled scans with semantic Bayesian kernel
+inference (S-BKI, Gan et al. 2020) or the semantic counting sensor model (S-CSM), inserting the
+scans one after another. Writes DIR/voxels.csv (every voxel with evidence: centre, state, class,
+variance, class probabilities), DIR/voxels.ply (occupied voxels as a coloured point cloud for
+CloudCompare or MeshLab), figures (3D render and top view, with and without var_thresh) and, with
+--video, the map after each scan as GIF and MP4."""
+
+EPILOG = """\
+examples:
+  python -m hw4 bki --dataset toy                       # the 12 toy scans, S-BKI
+  python -m hw4 bki --dataset toy --method scsm --out out/toy_csm
+  python -m hw4 bki --dataset semantickitti /data/kitti/dataset/sequences/04 --scans 100
+PATH is a folder of PCD scans (toy) or a SemanticKITTI sequence folder with velodyne/, labels/
+(or --config with labels = "predictions"), poses.txt and calib.txt. Without PATH the verified toy
+scans (or the one-frame SemanticKITTI sample) from data/ are used."""
+
+
+def add_arguments(p: argparse.ArgumentParser) -> None:
+    """Add the ``bki`` options to a parser."""
+    p.add_argument("path", nargs="?", metavar="PATH", default=None,
+                   help="folder of labelled PCD scans (toy) or a SemanticKITTI sequence folder")
+    p.add_argument("--dataset", choices=DATASETS, default="toy",
+                   help="dataset layout and default settings (default: toy)")
+    p.add_argument("--method", choices=METHODS, default="sbki",
+                   help="sbki: sparse-kernel inference; scsm: counting sensor model (default: sbki)")
+    p.add_argument("--scans", type=int, default=None, metavar="N",
+                   help="insert the first N scans (default: the config's, 0 = all)")
+    p.add_argument("--out", type=Path, default=None, metavar="DIR",
+                   help="output folder (default: out/bki/<dataset>_<method>)")
+    p.add_argument("--config", type=Path, default=None, metavar="TOML",
+                   help="settings file instead of hw4/bki/configs/<dataset>.toml")
+    p.add_argument("--video", action="store_true",
+                   help="also write the map after each scan as mapping.gif and mapping.mp4")
+    p.add_argument("--no-figures", action="store_true", help="write only voxels.csv and voxels.ply")
+
+
+def register(subparsers) -> argparse.ArgumentParser:
+    """Add the ``bki`` subcommand to an argparse subparsers object."""
+    p = subparsers.add_parser("bki", help="3D semantic mapping (S-BKI / S-CSM) of labelled scans",
+                              description=DESCRIPTION, epilog=EPILOG,
+                              formatter_class=argparse.RawDescriptionHelpFormatter)
+    add_arguments(p)
+    p.set_defaults(func=run_bki)
+    return p
+
+
+def run_bki(args) -> int:
+    """Run the ``bki`` command; return the exit code (errors raise :class:`InputError`)."""
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    from tqdm import tqdm
+
+    from . import render
+    from .io import write_csv, write_ply
+    from .pipeline import map_scans, new_map, scan_source
+    from .voxelmap import FREE, OCCUPIED, UNKNOWN
+
+    cfg = load_config(args.config if args.config else args.dataset)
+    n = cfg.scans if args.scans is None else args.scans
+    if n < 0:
+        raise InputError(f"--scans must be 0 (all) or a positive number; got {n}.")
+    loaders = scan_source(args.dataset, args.path, cfg)
+    if n:
+        loaders = loaders[:n]
+    out = args.out or Path("out") / "bki" / f"{args.dataset}_{args.method}"
+    out.mkdir(parents=True, exist_ok=True)
+
+    vmap = new_map(cfg, args.method)
+    hits = free = 0
+    for step in tqdm(map_scans(loaders, cfg, args.method, vmap), total=len(loaders), unit="scan",
+                     desc=f"{args.method} {args.dataset}", file=sys.stderr):
+        hits += step.training.n_hits
+        free += step.training.n_free
+    view = vmap.view()
+    write_csv(view, out / "voxels.csv")
+    write_ply(view, out / "voxels.ply")
+    written = ["voxels.csv", "voxels.ply"]
+    title = {"sbki": "S-BKI", "scsm": "S-CSM"}[args.method]
+    if not args.no_figures and len(view):
+        cam = render.camera_for([view])
+        for colour in ("class", "variance"):
+            for which in ("occupied", "reference"):
+                name = f"map3d_{colour}{'' if which == 'occupied' else '_no_var_thresh'}.png"
+                fig = render.plot_maps({title: view}, cam, colour, which, vmax=cfg.var_thresh)
+                fig.savefig(out / name, dpi=110, bbox_inches="tight")
+                plt.close(fig)
+                written.append(name)
+            fig = render.plot_topdown({title: view}, cam, colour, vmax=cfg.var_thresh)
+            fig.savefig(out / f"topdown_{colour}.png", dpi=110)
+            plt.close(fig)
+            written.append(f"topdown_{colour}.png")
+    if args.video:  # a second pass, now that the final map fixes the camera of every frame
+        groups = ((step.map.view(),) for step in map_scans(loaders, cfg, args.method))
+        render.mapping_video(groups, render.camera_for([view]), (title,), out / "mapping.gif",
+                             out / "mapping.mp4", width=5.0)
+        written += ["mapping.gif", "mapping.mp4"]
+    st = view.state
+    print(f"{len(loaders)} scans: {hits:,} training hits and {free:,} free points "
+          f"(after {cfg.ds_resolution} m downsampling)")
+    print(f"{title} map at {cfg.resolution} m: {len(view):,} voxels with evidence, "
+          f"{int((st == OCCUPIED).sum()):,} occupied, {int((st == FREE).sum()):,} free, "
+          f"{int((st == UNKNOWN).sum()):,} unknown (variance > {cfg.var_thresh}); "
+          f"{int((view.state_reference == OCCUPIED).sum()):,} occupied without var_thresh")
+    print(f"wrote {', '.join(written)} to {out}")
+    return 0
+
+
+def main(argv=None) -> int:
+    """Stand-alone entry point (``python -m hw4.bki``)."""
+    parser = argparse.ArgumentParser(prog="python -m hw4.bki", description=DESCRIPTION, epilog=EPILOG,
+                                     formatter_class=argparse.RawDescriptionHelpFormatter)
+    add_arguments(parser)
+    args = parser.parse_args(argv)
+    try:
+        return run_bki(args)
+    except InputError as e:
+        print(f"error: {e}", file=sys.stderr)
+        return 2

@@ -1,0 +1,365 @@
+"""Pictures of 3D semantic voxel maps: voxel renders, top-down views and the mapping video.
+
+* :func:`draw_voxels` draws voxels as shaded cubes (only the faces that are exposed and turned to
+  the camera, so tens of thousands of voxels render in a few seconds) on a 3D axis whose camera
+  (elevation, azimuth, limits) the caller fixes, so maps of two methods are seen identically.
+* :func:`topdown` makes a top view: for every (x, y) column the highest selected voxel, coloured by
+  class or by a scalar (variance).
+* :func:`write_video` writes frames as GIF (imageio) and MP4 (imageio-ffmpeg ships its own ffmpeg).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from .palette import class_colors
+from .voxelmap import MapView
+
+# the six face directions, the four corners of each face (unit cube [0, 1]^3) and a fixed shading
+_DIRS = np.array([[1, 0, 0], [-1, 0, 0], [0, 1, 0], [0, -1, 0], [0, 0, 1], [0, 0, -1]])
+_CORNERS = np.array([
+    [[1, 0, 0], [1, 1, 0], [1, 1, 1], [1, 0, 1]], [[0, 0, 0], [0, 0, 1], [0, 1, 1], [0, 1, 0]],
+    [[0, 1, 0], [0, 1, 1], [1, 1, 1], [1, 1, 0]], [[0, 0, 0], [1, 0, 0], [1, 0, 1], [0, 0, 1]],
+    [[0, 0, 1], [1, 0, 1], [1, 1, 1], [0, 1, 1]], [[0, 0, 0], [0, 1, 0], [1, 1, 0], [1, 0, 0]]],
+    dtype=float)
+_SHADE = np.array([0.78, 0.62, 0.70, 0.86, 1.0, 0.45])
+
+
+@dataclass(frozen=True)
+class Camera:
+    """A fixed 3D view: elevation and azimuth [deg] and axis limits [m], world frame."""
+
+    elev: float
+    azim: float
+    lo: tuple
+    hi: tuple
+    zoom: float = 1.2
+
+
+def camera_for(views, elev: float = 38.0, azim: float = -115.0, pad: float = 0.2) -> Camera:
+    """One camera framing the occupied voxels of all ``views`` (so every panel looks the same)."""
+    pts = np.vstack([v.centres[v.occupied] for v in views if v.occupied.any()] or [np.zeros((1, 3))])
+    return Camera(elev, azim, tuple(pts.min(0) - pad), tuple(pts.max(0) + pad))
+
+
+def _view_vector(cam: Camera) -> np.ndarray:
+    e, a = np.radians(cam.elev), np.radians(cam.azim)
+    return np.array([np.cos(e) * np.cos(a), np.cos(e) * np.sin(a), np.sin(e)])
+
+
+def visible_faces(idx: np.ndarray, cam: Camera):
+    """Faces of voxels ``idx`` (M, 3 int) that no other voxel covers and that face the camera.
+
+    Returns
+    -------
+    voxel : (F,) int array, the voxel of each face
+    direction : (F,) int array, index into the six face directions
+    """
+    key = lambda a: (a[:, 0] + (1 << 20)) * (1 << 42) + (a[:, 1] + (1 << 20)) * (1 << 21) + (a[:, 2] + (1 << 20))
+    keys = np.sort(key(idx))
+    toward = _DIRS @ _view_vector(cam) > 0
+    vox, dirs = [], []
+    for d in np.flatnonzero(toward):
+        nb = key(idx + _DIRS[d])
+        pos = np.minimum(np.searchsorted(keys, nb), len(keys) - 1)
+        free = keys[pos] != nb
+        vox.append(np.flatnonzero(free))
+        dirs.append(np.full(int(free.sum()), d))
+    return np.concatenate(vox), np.concatenate(dirs)
+
+
+def draw_voxels(ax, centres: np.ndarray, rgb: np.ndarray, resolution: float, cam: Camera) -> None:
+    """Draw voxels as shaded cubes on a 3D axis, seen from ``cam``.
+
+    Parameters
+    ----------
+    ax : matplotlib 3D axis
+    centres : (M, 3) float array [m], world frame
+    rgb : (M, 3) float array in [0, 1], colour of each voxel
+    resolution : float [m], voxel edge
+    cam : Camera
+    """
+    from mpl_toolkits.mplot3d.art3d import Poly3DCollection
+    ax.view_init(elev=cam.elev, azim=cam.azim)
+    ax.set_xlim(cam.lo[0], cam.hi[0])
+    ax.set_ylim(cam.lo[1], cam.hi[1])
+    ax.set_zlim(cam.lo[2], cam.hi[2])
+    ax.set_box_aspect(np.array(cam.hi) - np.array(cam.lo), zoom=cam.zoom)
+    ax.set_xlabel("x [m]", labelpad=-6)
+    ax.set_ylabel("y [m]", labelpad=-6)
+    ax.set_zlabel("z [m]", labelpad=-10)
+    ax.tick_params(labelsize=6, pad=-3)
+    if len(centres) == 0:
+        return
+    idx = np.floor(centres / resolution).astype(np.int64)
+    vox, d = visible_faces(idx, cam)
+    quads = (idx[vox, None, :] + _CORNERS[d]) * resolution
+    colour = np.clip(rgb[vox] * _SHADE[d, None], 0, 1)
+    ax.add_collection3d(Poly3DCollection(quads, facecolors=colour, edgecolors="none",
+                                         linewidths=0, rasterized=True))
+
+
+def class_rgb(view: MapView, mask: np.ndarray) -> np.ndarray:
+    """(M, 3) colours in [0, 1] of the selected voxels' most likely classes."""
+    return class_colors(view.probs.shape[1])[view.cls[mask]] / 255.0
+
+
+def scalar_rgb(values: np.ndarray, vmax: float, cmap: str = "viridis") -> np.ndarray:
+    """(M, 3) colours in [0, 1] of scalars on ``[0, vmax]``."""
+    from matplotlib import colormaps
+    return colormaps[cmap](np.clip(values / vmax, 0, 1))[:, :3]
+
+
+def topdown(view: MapView, mask: np.ndarray, values: np.ndarray | None = None, lo=None, hi=None):
+    """Top view: per (x, y) column the highest selected voxel.
+
+    Parameters
+    ----------
+    view : MapView
+    mask : (M,) bool, voxels to show (e.g. occupied)
+    values : (M,) float, optional
+        Show this scalar (e.g. variance) instead of the class.
+    lo, hi : (2,) [m], optional
+        x, y extent of the image (default: the selected voxels').
+
+    Returns
+    -------
+    image : (H, W) int array of classes (-1 = empty) or (H, W) float array (NaN = empty);
+        row 0 is the smallest y (use ``origin="lower"``)
+    extent : (xmin, xmax, ymin, ymax) [m] for ``imshow``
+    """
+    r = view.resolution
+    idx = np.floor(view.centres[mask] / r).astype(np.int64)
+    if lo is None:
+        lo = view.centres[mask, :2].min(0) if mask.any() else np.zeros(2)
+        hi = view.centres[mask, :2].max(0) if mask.any() else np.ones(2)
+    i0 = np.floor(np.asarray(lo) / r).astype(np.int64)
+    i1 = np.floor(np.asarray(hi) / r).astype(np.int64)
+    shape = (int(i1[1] - i0[1] + 1), int(i1[0] - i0[0] + 1))
+    src = view.cls[mask] if values is None else values[mask]
+    inside = np.all((idx[:, :2] >= i0) & (idx[:, :2] <= i1), axis=1)
+    idx, src = idx[inside], src[inside]
+    order = np.lexsort((idx[:, 2], idx[:, 0], idx[:, 1]))  # by column, then height
+    idx, src = idx[order], src[order]
+    col = (idx[:, 1] - i0[1]) * shape[1] + (idx[:, 0] - i0[0])
+    last = np.r_[col[1:] != col[:-1], True]  # the highest voxel of each column
+    if values is None:
+        img = np.full(shape[0] * shape[1], -1, np.int64)
+    else:
+        img = np.full(shape[0] * shape[1], np.nan)
+    img[col[last]] = src[last]
+    extent = ((i0[0]) * r, (i1[0] + 1) * r, (i0[1]) * r, (i1[1] + 1) * r)
+    return img.reshape(shape), extent
+
+
+def class_image(img: np.ndarray, num_class: int) -> np.ndarray:
+    """RGB image (H, W, 3) in [0, 1] of a class image from :func:`topdown` (empty = light grey)."""
+    pal = np.vstack([class_colors(num_class) / 255.0, [[0.92, 0.92, 0.92]]])
+    return pal[np.where(img < 0, num_class, img)]
+
+
+def figure_to_array(fig) -> np.ndarray:
+    """The rendered figure as an (H, W, 3) uint8 array."""
+    fig.canvas.draw()
+    return np.asarray(fig.canvas.buffer_rgba())[:, :, :3].copy()
+
+
+def write_video(frames, gif_path=None, mp4_path=None, fps: float = 2.0) -> list[Path]:
+    """Write frames (list of (H, W, 3) uint8 arrays) as a looping GIF and/or an H.264 MP4.
+
+    The MP4 uses the ffmpeg binary shipped by ``imageio-ffmpeg``; frames are padded to even sizes.
+    """
+    import imageio.v2 as imageio
+    out = []
+    if gif_path is not None:
+        imageio.mimsave(gif_path, frames, duration=1000.0 / fps, loop=0)
+        out.append(Path(gif_path))
+    if mp4_path is not None:
+        h, w = frames[0].shape[:2]
+        pad = [np.pad(f, ((0, h % 2), (0, w % 2), (0, 0)), mode="edge") for f in frames]
+        with imageio.get_writer(mp4_path, fps=fps, codec="libx264", quality=7,
+                                macro_block_size=1, ffmpeg_log_level="error",
+                                output_params=["-pix_fmt", "yuv420p"]) as wr:
+            for f in pad:
+                wr.append_data(f)
+        out.append(Path(mp4_path))
+    return out
+
+
+def _mask(view: MapView, which: str) -> np.ndarray:
+    if which == "occupied":
+        return view.occupied
+    if which == "reference":
+        return view.state_reference == 2
+    raise ValueError(f"unknown voxel selection {which!r}")
+
+
+def plot_maps(views: dict, cam: Camera, colour: str = "class", which: str = "occupied",
+              vmax: float = 0.09, width: float = 5.0, fig=None):
+    """3D voxel renders of several maps side by side, all seen from the same camera.
+
+    Parameters
+    ----------
+    views : dict of title -> MapView
+    cam : Camera
+    colour : {"class", "variance"}
+    which : {"occupied", "reference"}
+        Occupied voxels with ``var_thresh`` applied, or as the reference shows them (without).
+    vmax : float, top of the variance colour scale
+    width : float [inch] per panel
+    """
+    import matplotlib.pyplot as plt
+    n = len(views)
+    if fig is None:
+        fig = plt.figure(figsize=(width * n + (0.6 if colour == "variance" else 1.0), width * 0.8))
+        fig.subplots_adjust(left=0.0, right=0.92 if colour == "variance" else 0.88, bottom=0.04,
+                            top=0.94, wspace=0.05)
+    axes = []
+    for i, (title, v) in enumerate(views.items()):
+        ax = fig.add_subplot(1, n, i + 1, projection="3d")
+        m = _mask(v, which)
+        rgb = class_rgb(v, m) if colour == "class" else scalar_rgb(v.variance[m], vmax)
+        draw_voxels(ax, v.centres[m], rgb, v.resolution, cam)
+        ax.set_title(title, fontsize=10)
+        axes.append(ax)
+    if colour == "variance":
+        variance_colorbar(fig, axes, vmax)
+    else:
+        _class_legend(fig, views, loc="center right")
+    return fig
+
+
+def variance_colorbar(fig, axes, vmax: float):
+    """A colour bar for variance colours on ``[0, vmax]`` beside ``axes``."""
+    from matplotlib.cm import ScalarMappable
+    from matplotlib.colors import Normalize
+    return fig.colorbar(ScalarMappable(Normalize(0, vmax), "viridis"), ax=axes, shrink=0.6,
+                        pad=0.02, label="variance of the most likely class")
+
+
+def _class_legend(fig, views, loc: str = "lower center") -> None:
+    from matplotlib.patches import Patch
+    from .palette import class_names
+    v = next(iter(views.values()))
+    K = v.probs.shape[1]
+    present = sorted(set(np.concatenate([w.cls[w.occupied] for w in views.values()]).tolist()) - {0})
+    pal, names = class_colors(K) / 255.0, class_names(K)
+    fig.legend(handles=[Patch(color=pal[k], label=names[k]) for k in present], loc=loc,
+               ncol=1 if loc == "center right" else (min(len(present), 6) or 1), fontsize=8,
+               frameon=False)
+
+
+def plot_topdown(views: dict, cam: Camera, colour: str = "class", which: str = "occupied",
+                 vmax: float = 0.09, width: float = 4.0):
+    """Top views of several maps side by side (highest selected voxel per column), same extent."""
+    import matplotlib.pyplot as plt
+    n = len(views)
+    fig, axes = plt.subplots(1, n, figsize=(width * n + (0.8 if colour == "variance" else 0), width * 1.1),
+                             squeeze=False, layout="constrained")
+    im = None
+    for ax, (title, v) in zip(axes[0], views.items()):
+        m = _mask(v, which)
+        if colour == "class":
+            img, ext = topdown(v, m, lo=cam.lo[:2], hi=cam.hi[:2])
+            ax.imshow(class_image(img, v.probs.shape[1]), origin="lower", extent=ext,
+                      interpolation="nearest")
+        else:
+            img, ext = topdown(v, m, values=v.variance, lo=cam.lo[:2], hi=cam.hi[:2])
+            ax.set_facecolor((0.92, 0.92, 0.92))
+            im = ax.imshow(img, origin="lower", extent=ext, cmap="viridis", vmin=0, vmax=vmax,
+                           interpolation="nearest")
+        ax.set_title(title, fontsize=10)
+        ax.set_xlabel("x [m]")
+        ax.set_ylabel("y [m]")
+        ax.set_aspect("equal")
+    if im is not None:
+        fig.colorbar(im, ax=axes[0].tolist(), shrink=0.8, label="variance of the most likely class")
+    else:
+        _class_legend(fig, views, loc="outside lower center")
+    return fig
+
+
+def state_slice(view: MapView, z: float, which: str = "occupied", lo=None, hi=None):
+    """RGB image of the voxel layer containing height ``z`` [m]: occupied voxels in their class
+    colour, free white, unknown (variance above var_thresh) mid grey, no evidence light grey.
+
+    ``which="reference"`` ignores var_thresh as the reference implementation does. Returns the
+    (H, W, 3) image (row 0 = smallest y) and its ``imshow`` extent [m].
+    """
+    r = view.resolution
+    k = int(np.floor(z / r))
+    layer = np.floor(view.centres[:, 2] / r).astype(np.int64) == k
+    state = view.state if which == "occupied" else view.state_reference
+    img, ext = topdown(view, layer, values=state.astype(float), lo=lo, hi=hi)
+    cls, _ = topdown(view, layer, lo=lo, hi=hi)
+    K = view.probs.shape[1]
+    rgb = np.empty(img.shape + (3,))
+    rgb[:] = 0.85                                         # no evidence
+    rgb[img == 0] = 0.5                                   # unknown
+    rgb[img == 1] = 1.0                                   # free
+    occ = img == 2
+    rgb[occ] = class_colors(K)[cls[occ]] / 255.0
+    return rgb, ext
+
+
+def plot_slices(panels: dict, z: float, cam: Camera, width: float = 4.0):
+    """Horizontal slices at height ``z`` [m] side by side: ``panels`` maps a title to
+    ``(MapView, which)`` with ``which`` in {"occupied", "reference"}."""
+    import matplotlib.pyplot as plt
+    from matplotlib.patches import Patch
+    n = len(panels)
+    fig, axes = plt.subplots(1, n, figsize=(width * n, width * 1.15), squeeze=False,
+                             layout="constrained")
+    for ax, (title, (v, which)) in zip(axes[0], panels.items()):
+        rgb, ext = state_slice(v, z, which, lo=cam.lo[:2], hi=cam.hi[:2])
+        ax.imshow(rgb, origin="lower", extent=ext, interpolation="nearest")
+        ax.set_title(title, fontsize=10)
+        ax.set_xlabel("x [m]")
+        ax.set_ylabel("y [m]")
+    from .palette import class_names
+    v = next(iter(panels.values()))[0]
+    K = v.probs.shape[1]
+    present = sorted(set(np.concatenate([w.cls[w.state_reference == 2] for w, _ in panels.values()]).tolist()))
+    handles = [Patch(color=class_colors(K)[k] / 255.0, label=class_names(K)[k]) for k in present]
+    handles += [Patch(facecolor="white", edgecolor="0.3", label="free"),
+                Patch(color="0.5", label="unknown (variance > var_thresh)"),
+                Patch(color="0.85", label="no evidence")]
+    fig.legend(handles=handles, loc="outside lower center", ncol=len(handles), fontsize=8,
+               frameon=False)
+    return fig
+
+
+def mapping_video(view_groups, cam: Camera, titles, gif=None, mp4=None, strip=None,
+                  strip_scans=None, width: float = 4.0, dpi: int = 75, fps: float = 2.0) -> list:
+    """Render the map after each scan (methods side by side) and write GIF, MP4 and a PNG strip.
+
+    Parameters
+    ----------
+    view_groups : iterable of tuples of MapView, one tuple per inserted scan (one view per method)
+    cam : Camera, the same for every frame
+    titles : sequence of str, one per method
+    gif, mp4, strip : path, optional
+        Where to write the animation (GIF, MP4) and a PNG of some frames stacked (for print).
+    strip_scans : sequence of int, optional
+        1-based scan numbers of the strip's frames (default: four evenly spaced, ending with the last).
+
+    Returns
+    -------
+    list of (H, W, 3) uint8 frames
+    """
+    import matplotlib.pyplot as plt
+    frames = []
+    for i, views in enumerate(view_groups):
+        fig = plot_maps({f"{t}, scan {i + 1}": v for t, v in zip(titles, views)}, cam, width=width)
+        fig.set_dpi(dpi)
+        frames.append(figure_to_array(fig))
+        plt.close(fig)
+    write_video(frames, gif, mp4, fps)
+    if strip is not None:
+        n = len(frames)
+        picks = strip_scans or sorted({max(1, round(n * q)) for q in (0.25, 0.5, 0.75, 1.0)})
+        import imageio.v2 as imageio
+        imageio.imwrite(strip, np.vstack([frames[k - 1] for k in picks]))
+    return frames

@@ -1,0 +1,110 @@
+"""Bad inputs give one clear sentence (InputError), never a silently empty or wrong map."""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from test_bki_kitti import write_sequence
+
+from hw4.bki import Scan, load_config, map_scans, scan_source, validate_scan
+from hw4.bki.cli import main
+from hw4.bki.kitti import SemanticKITTISequence
+from hw4.errors import InputError
+
+PCD = """VERSION 0.7
+FIELDS x y z label
+SIZE 4 4 4 4
+TYPE F F F U
+COUNT 1 1 1 1
+WIDTH {n}
+HEIGHT 1
+VIEWPOINT 0 0 0 1 0 0 0
+POINTS {n}
+DATA ascii
+{body}"""
+
+
+def _pcd(folder, rows):
+    folder.mkdir(exist_ok=True)
+    body = "".join(" ".join(str(v) for v in r) + " -1\n" for r in rows)
+    (folder / "scan_1.pcd").write_text(PCD.format(n=len(rows), body=body))
+    return folder
+
+
+def _map_toy(folder):
+    cfg = load_config("toy")
+    return list(map_scans(scan_source("toy", folder, cfg), cfg))
+
+
+def _one_sentence(e):
+    msg = str(e.value)
+    assert msg.endswith(".") and "\n" not in msg
+    return msg
+
+
+def test_no_points(tmp_path):
+    with pytest.raises(InputError, match="has no points") as e:
+        _map_toy(_pcd(tmp_path / "d", []))
+    _one_sentence(e)
+
+
+def test_nan_coordinates(tmp_path):
+    with pytest.raises(InputError, match="NaN or infinite") as e:
+        _map_toy(_pcd(tmp_path / "d", [(1, 2, 0.5, 1), (np.nan, 2, 0.5, 2)]))
+    assert "point 1" in _one_sentence(e)
+
+
+@pytest.mark.parametrize("label", [0, 4, 7])
+def test_labels_out_of_range(tmp_path, label):
+    with pytest.raises(InputError, match=f"label {label}, outside the map's classes 1..3") as e:
+        _map_toy(_pcd(tmp_path / "d", [(1, 2, 0.5, 1), (1, 2, 0.6, label)]))
+    _one_sentence(e)
+
+
+def test_scan_checks_direct():
+    with pytest.raises(InputError, match="origin"):
+        validate_scan(Scan(np.ones((2, 3)), np.array([1, 1]), np.array([0, np.inf, 0])), 4)
+    with pytest.raises(InputError, match="2 points but 1 labels"):
+        validate_scan(Scan(np.ones((2, 3)), np.array([1]), np.zeros(3)), 4)
+
+
+@pytest.mark.parametrize("bad", ["scaled", "sheared", "reflected", "nan"])
+def test_pose_that_is_not_a_rigid_transform(tmp_path, bad):
+    def hook(t, P):
+        if t == 2:
+            P = P.copy()
+            if bad == "scaled":
+                P[:3, :3] *= 1.5
+            elif bad == "sheared":
+                P[0, 1] += 0.3
+            elif bad == "reflected":
+                P[:3, 0] *= -1
+            else:
+                P[1, 3] = np.nan
+        return P
+    write_sequence(tmp_path / "04", n_scans=3, pose_hook=hook)
+    with pytest.raises(InputError, match="pose 2 .line 3") as e:
+        SemanticKITTISequence(tmp_path / "04")
+    _one_sentence(e)
+
+
+def test_kitti_layout_errors(tmp_path):
+    seq = tmp_path / "04"
+    write_sequence(seq, n_scans=2)
+    (seq / "velodyne" / "000001.bin").write_bytes((seq / "velodyne" / "000001.bin").read_bytes()[:-5])
+    s = SemanticKITTISequence(seq)
+    with pytest.raises(InputError, match="not a multiple of 16"):
+        s.scan(1)
+    (seq / "labels" / "000000.label").write_bytes((seq / "labels" / "000000.label").read_bytes()[:-8])
+    with pytest.raises(InputError, match="labels for the"):
+        s.scan(0)
+    (seq / "calib.txt").write_text("P0: 1 0 0 0 0 1 0 0 0 0 1 0\n")
+    with pytest.raises(InputError, match="no 'Tr:' line"):
+        SemanticKITTISequence(seq)
+    with pytest.raises(InputError, match="not a folder"):
+        SemanticKITTISequence(tmp_path / "nowhere")
+
+
+def test_cli_prints_one_sentence_and_exits_2(tmp_path, capsys):
+    assert main(["--dataset", "toy", str(tmp_path / "nothing-here")]) == 2
+    err = capsys.readouterr().err.strip()
+    assert err.startswith("error: ") and "neither a PCD file nor a folder" in err and "\n" not in err
