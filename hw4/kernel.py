@@ -30,9 +30,12 @@ def sparse_kernel(d, sigma0: float = SIGMA0, l: float = LENGTH):
     Returns
     -------
     ndarray, same shape as ``d``: kernel weights (0 where d >= l).
+
+    Just below ``l`` the kernel is of order (1 - d/l)^3 and rounding can make it about -1e-17;
+    it is clamped at 0 so that evidence never decreases.
     """
     d = np.asarray(d, dtype=float)
     u = d / l
     k = sigma0 * ((2.0 + np.cos(2.0 * np.pi * u)) * (1.0 - u) / 3.0
                   + np.sin(2.0 * np.pi * u) / (2.0 * np.pi))
-    return np.where(d < l, k, 0.0)
+    return np.where(d < l, np.maximum(k, 0.0), 0.0)
