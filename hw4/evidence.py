@@ -166,7 +166,7 @@ def _pairs(grid, poses, nearest_poses, z_max, progress):
         yield cell[keep], pose[keep], r[keep], phi[keep]
 
 
-def _n_samples(z, step):
+def n_samples(z, step):
     """Number of free samples j * step (j = 0, 1, ...) strictly short of range z [m]."""
     n = np.ceil(z / step).astype(np.int64)
     n = np.where((n - 1) * step >= z, n - 1, n)
@@ -191,7 +191,7 @@ def _continuous_nearest(grid, poses, table, cls_hit, free, add, cell, pose, k, s
     m = (np.abs(e) < l) & (t > -l) & (t < zk + l)
     cell, p, zk, c, s, t, cells = cell[m], p[m], zk[m], c[m], s[m], t[m], cells[m]
     j_lo = np.maximum(np.floor((t - l) / step).astype(np.int64), 0)
-    j_hi = np.minimum(np.ceil((t + l) / step).astype(np.int64), _n_samples(zk, step) - 1)
+    j_hi = np.minimum(np.ceil((t + l) / step).astype(np.int64), n_samples(zk, step) - 1)
     for o in range(int(np.ceil(2 * l / step)) + 2):
         j = j_lo + o
         ok = j <= j_hi
@@ -231,7 +231,7 @@ def _all_beams(grid, poses, table, cls_hit, free, add, nearest_poses, z_max, sig
         theta = table.bearings[b] + h
         c, s = np.cos(theta), np.sin(theta)
         z = table.ranges[b]
-        ns = _n_samples(z, step)
+        ns = n_samples(z, step)
         beam = np.repeat(np.arange(len(b)), ns)
         sj = (np.arange(ns.sum()) - np.repeat(np.cumsum(ns) - ns, ns)) * step
         pts = np.concatenate([np.column_stack([px + z * c, py + z * s]),

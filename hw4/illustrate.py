@@ -14,7 +14,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .evidence import SAMPLE_STEP, _n_samples
+from .evidence import SAMPLE_STEP, n_samples
 from .kernel import LENGTH, SIGMA0, sparse_kernel
 
 
@@ -24,7 +24,7 @@ def free_samples(z: float, step: float = SAMPLE_STEP, end_sample: bool = False) 
     ``s = 0, step, 2 step, ...`` strictly short of ``z``, exactly as :mod:`hw4.evidence` places
     them; with ``end_sample`` one more sample at ``s = z`` itself.
     """
-    n = int(_n_samples(np.asarray([float(z)]), step)[0])
+    n = int(n_samples(np.asarray([float(z)]), step)[0])
     s = np.arange(n) * step
     return np.append(s, float(z)) if end_sample else s
 
