@@ -5,7 +5,6 @@ import functools
 import importlib
 
 import numpy as np
-import pytest
 from scipy.io import loadmat
 
 MODEL_CLASS = {
@@ -55,11 +54,21 @@ def build_map(model: str, robot_pose, laser_scan, **kw):
 
 
 @functools.lru_cache(maxsize=None)
-def intel_map(model: str, grid_size: float, nearest_poses, beams: str):
-    """The package's full Intel map for one parameter set, built once per test session."""
+def intel_map(model: str, grid_size: float, nearest_poses, beams: str, range_y=None,
+              sample_step=None):
+    """The package's Intel map for one parameter set, built once per test session.
+
+    ``range_y=(-25, hi)`` builds only the southern rows of the template grid (same x extent,
+    same cell centres, same cell indices i = iy * nx + ix for the rows kept): a cell's counts
+    depend only on its centre, and the map is that much cheaper to build.
+    """
     kw = {"grid_size": grid_size, "nearest_poses": nearest_poses}
     if beams != "nearest":
         kw["beams"] = beams
+    if range_y is not None:
+        kw["range_y"] = list(range_y)
+    if sample_step is not None:
+        kw["sample_step"] = sample_step
     pose, scan = intel_raw(model in ("S_CSM", "continuous_S_CSM"))
     return build_map(model, pose, scan, **kw)
 
@@ -73,11 +82,16 @@ def evidence(obj, semantic: bool):
     return alpha.reshape(-1, 1), beta.reshape(-1, 1)
 
 
-@pytest.fixture(scope="session")
-def intel_binary():
-    return intel_raw(False)
-
-
-@pytest.fixture(scope="session")
-def intel_semantic():
-    return intel_raw(True)
+def synthetic_scene(poses, scans):
+    """(robotPose, laserScan) as loadmat would return them, from poses [(x, y, h), ...] and
+    robot-frame scans given as (ranges, bearings[, labels]) triples of equal-length sequences."""
+    arrays = []
+    for s in scans:
+        r = np.asarray(s[0], dtype=float)
+        b = np.asarray(s[1], dtype=float)
+        rows = [r * np.cos(b), r * np.sin(b)]
+        if len(s) > 2:
+            rows.append(np.asarray(s[2], dtype=float))
+        arrays.append(np.vstack(rows))
+    xs, ys, hs = zip(*poses)
+    return make_pose_struct(xs, ys, hs), make_scan_cell(arrays)

@@ -116,7 +116,8 @@ def select_poses(m, poses, tree, nearest_poses, z_max=Z_MAX) -> list[int]:
                 chosen.append(t)
         return chosen
     _, idxs = tree.query(m, nearest_poses)
-    return [int(t) for t in np.atleast_1d(idxs)]
+    # with fewer than nearest_poses poses, KDTree pads with index len(poses): use them all
+    return [int(t) for t in np.atleast_1d(idxs) if t < len(poses)]
 
 
 def perceptual_field(m, pose, z_max=Z_MAX):
