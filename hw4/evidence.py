@@ -118,7 +118,12 @@ def count_evidence(grid: Grid, poses, scans, *, model: str = "discrete", semanti
                    sample_step, progress)
         return acc.reshape(grid.n_cells, n_classes)
 
-    for cell, pose, r, phi in _pairs(grid, poses, nearest_poses, z_max, progress):
+    # A pose adds nothing to cells beyond its longest beam plus half an obstacle (discrete) or
+    # plus l (continuous): skip those pairs before any trigonometry.
+    longest = np.zeros(len(poses))
+    np.maximum.at(longest, table.pose_of, table.ranges)
+    reach = longest + (w_obstacle / 2 if model == "discrete" else l) + 1e-6
+    for cell, pose, r, phi in _pairs(grid, poses, nearest_poses, z_max, progress, reach):
         if model == "discrete":  # cells outside every beam's width get nothing
             keep = table.may_reach(pose, phi, w_beam / 2)
             cell, pose, r, phi = cell[keep], pose[keep], r[keep], phi[keep]
@@ -142,8 +147,11 @@ def count_evidence(grid: Grid, poses, scans, *, model: str = "discrete", semanti
     return acc.reshape(grid.n_cells, n_classes)
 
 
-def _pairs(grid, poses, nearest_poses, z_max, progress):
-    """Yield blocks of (cell, pose, r, phi) for the poses each cell considers, inside the field."""
+def _pairs(grid, poses, nearest_poses, z_max, progress, reach=None):
+    """Yield blocks of (cell, pose, r, phi) for the poses each cell considers, inside the field.
+
+    ``reach`` (T,) [m], optional: drop pairs farther than ``reach[pose]`` from the pose first.
+    """
     cells = grid.cells
     n_poses = len(poses)
     per_cell = n_poses if nearest_poses is None else min(nearest_poses, n_poses)
@@ -161,6 +169,10 @@ def _pairs(grid, poses, nearest_poses, z_max, progress):
         else:
             pose = np.tile(np.arange(n_poses), len(idx))
         cell = np.repeat(idx, per_cell)
+        if reach is not None:
+            near = ((cells[cell, 0] - poses[pose, 0]) ** 2 + (cells[cell, 1] - poses[pose, 1]) ** 2
+                    < reach[pose] ** 2)
+            cell, pose = cell[near], pose[near]
         r, phi = relative(cells[cell], poses[pose])
         keep = in_field(r, phi, z_max)
         yield cell[keep], pose[keep], r[keep], phi[keep]
