@@ -1,0 +1,634 @@
+"""Held-out evaluation of occupancy and semantic maps.
+
+The homework asks which resolution and which model make the better map, but gives no measure of
+map quality. The published counting-sensor-model papers (Doherty et al. 2019, Gan et al. 2020)
+measure it on held-out data; this module does the same for the Intel sample:
+
+1. :func:`split_scans` holds out every ``every``-th scan (deterministic, no randomness);
+   the maps are built from the remaining *mapping* scans only.
+2. :func:`held_out_samples` turns each held-out scan into labelled points in the world frame:
+   every beam end point is an **occupied** sample (with its semantic label when the scan has
+   one), and points along the beam at ``s = step, 2 step, ...`` strictly short of
+   ``range - margin`` are **free** samples. The defaults ``step = 0.1 m`` (the free-sample spacing
+   of the continuous models, half the kernel length scale, so every 0.135 m cell a beam crosses
+   gets a sample) and ``margin = 0.25 m`` (half the coarsest cell of the study, so that at every
+   grid size a free sample lies at least half a cell before the surface it is contrasted with)
+   do not depend on the map: every map, at every grid size, is scored on the *same* points.
+3. A sample is scored in the cell whose centre is nearest to it (:meth:`hw4.grid.Grid.nearest_cell`).
+   Samples in cells without evidence (or outside the map) are **not** scored: the prior's 0.5 is
+   no prediction. Their share is reported separately (``unobserved``; ``coverage`` is the rest).
+4. Occupancy is scored by the ROC curve and its area (AUC) of the predicted probability of
+   occupancy: the Beta mean for the binary maps, ``1 - mean[free]`` for the semantic maps, the
+   log-odds for the classical baseline (:mod:`hw4.logodds`). Semantic maps are also scored by the
+   accuracy and per-class IoU of the most likely class at the held-out end points, the share of
+   free samples predicted free, and a confusion matrix.
+
+The one-call entry point for the notebooks is :func:`evaluate_all` (all models x grid sizes plus
+the baseline, one row per map). AUC is computed exactly from ranks (ties count one half), with
+no dependence on scikit-learn.
+"""
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass
+
+import numpy as np
+
+from . import data as _data
+from .errors import InputError
+from .posterior import most_likely_class
+
+GRID_SIZES = (0.135, 0.27, 0.5)  # the homework's resolution study [m]
+HOLD_OUT_EVERY = 10              # default split: every 10th scan is held out
+FREE_STEP = 0.1                  # spacing of the held-out free samples along a beam [m]
+FREE_MARGIN = 0.25               # free samples stop this far before the end point [m]
+N_LABELS = _data.N_LABELS        # semantic labels 1..6; class index 6 is free space
+
+
+# --------------------------------------------------------------------------------------------
+# Split and held-out samples
+# --------------------------------------------------------------------------------------------
+
+def split_scans(n_scans: int, every: int = HOLD_OUT_EVERY, offset: int | None = None) -> tuple:
+    """Deterministic split of scan indices into mapping and held-out scans.
+
+    Parameters
+    ----------
+    n_scans : int
+        Number of scans (743 for the Intel sample).
+    every : int
+        Hold out one scan in ``every`` (default 10).
+    offset : int, optional
+        Which scan of each block of ``every`` is held out (default ``every - 1``: scans 9, 19, ...,
+        so that the first scans, which start the map, are mapping scans).
+
+    Returns
+    -------
+    (mapping, held_out) : two sorted int arrays that partition ``range(n_scans)``.
+    """
+    if isinstance(every, bool) or not isinstance(every, (int, np.integer)) or every < 2:
+        raise InputError(f"every must be an integer >= 2 (hold out one scan in `every`); got {every!r}.")
+    offset = every - 1 if offset is None else offset
+    if not 0 <= offset < every:
+        raise InputError(f"offset must lie in 0..{every - 1}; got {offset!r}.")
+    idx = np.arange(int(n_scans))
+    held = idx % every == offset
+    return idx[~held], idx[held]
+
+
+def subset(data: _data.IntelData, idx) -> _data.IntelData:
+    """The poses and scans with indices ``idx`` as a new :class:`~hw4.data.IntelData`."""
+    idx = np.asarray(idx, dtype=np.int64)
+    return _data.IntelData(np.asarray(data.poses)[idx], [data.scans[i] for i in idx])
+
+
+@dataclass
+class HeldOut:
+    """Labelled test points from held-out scans, world frame.
+
+    Attributes
+    ----------
+    points : (N, 2) float [m], world frame
+    occupied : (N,) bool, True for beam end points, False for free samples along beams
+    label : (N,) int, semantic label 1..6 of end points (0 for free samples and for unlabelled scans)
+    scan : (N,) int, index (into the full data) of the scan the sample comes from
+    step, margin : float [m], the free-sample spacing and end margin used
+    """
+    points: np.ndarray
+    occupied: np.ndarray
+    label: np.ndarray
+    scan: np.ndarray
+    step: float = FREE_STEP
+    margin: float = FREE_MARGIN
+
+    @property
+    def n_occupied(self) -> int:
+        return int(self.occupied.sum())
+
+    @property
+    def n_free(self) -> int:
+        return int((~self.occupied).sum())
+
+    @property
+    def truth_class(self) -> np.ndarray:
+        """(N,) class index of each sample: label - 1 for end points, ``N_LABELS`` (free) otherwise."""
+        return np.where(self.occupied, self.label - 1, N_LABELS)
+
+
+def held_out_samples(data: _data.IntelData, idx, step: float = FREE_STEP,
+                     margin: float = FREE_MARGIN, z_max: float = 30.0) -> HeldOut:
+    """Occupied and free test points of the scans ``idx``, in the world frame.
+
+    Parameters
+    ----------
+    data : IntelData
+        Poses (T, 3) [m, m, rad] world frame; scans (2, N) or (3, N) [m] robot frame.
+    idx : array of int
+        Held-out scan indices.
+    step : float [m]
+        Free samples at ``s = step, 2 step, ...`` along each beam (the robot's own position,
+        ``s = 0``, is not sampled).
+    margin : float [m]
+        Free samples satisfy ``s < range - margin`` strictly.
+    z_max : float [m]
+        End points at or beyond the maximum range are not surfaces: no occupied sample there.
+    """
+    for v, name in ((step, "step"), (margin, "margin"), (z_max, "z_max")):
+        if isinstance(v, bool) or not np.isscalar(v) or not np.isfinite(v) or v <= 0:
+            raise InputError(f"{name} must be a positive number of metres; got {v!r}.")
+    pts, occ, lab, src = [], [], [], []
+    for t in np.asarray(idx, dtype=np.int64):
+        x, y, h = np.asarray(data.poses[t], dtype=float)
+        s = np.asarray(data.scans[t], dtype=float)
+        r = np.hypot(s[0], s[1])
+        u = np.column_stack([s[0], s[1]]) / np.maximum(r, 1e-300)[:, None]  # beam directions
+        c, sn = np.cos(h), np.sin(h)
+        rot = np.array([[c, -sn], [sn, c]])
+        hit = r < z_max
+        end = (rot @ s[:2]).T + [x, y]
+        labels = s[2].astype(np.int64) if s.shape[0] == 3 else np.zeros(s.shape[1], np.int64)
+        # free samples j * step, j = 1 .. n_j, with j * step < r - margin
+        n_j = np.maximum(np.ceil((r - margin) / step).astype(np.int64) - 1, 0)
+        n_j = np.where((n_j + 1) * step < r - margin, n_j + 1, n_j)  # guard float rounding
+        n_j = np.where(n_j * step >= r - margin, n_j - 1, n_j)
+        n_j = np.maximum(n_j, 0)
+        beam = np.repeat(np.arange(len(r)), n_j)
+        j = np.arange(n_j.sum()) - np.repeat(np.cumsum(n_j) - n_j, n_j) + 1
+        d = (j * step)[:, None] * u[beam]
+        free = (rot @ d.T).T + [x, y]
+        pts += [end[hit], free]
+        occ += [np.ones(hit.sum(), bool), np.zeros(len(free), bool)]
+        lab += [labels[hit], np.zeros(len(free), np.int64)]
+        src += [np.full(hit.sum() + len(free), t)]
+    if not pts:
+        raise InputError("no held-out scans were given.")
+    return HeldOut(np.concatenate(pts), np.concatenate(occ), np.concatenate(lab),
+                   np.concatenate(src), float(step), float(margin))
+
+
+# --------------------------------------------------------------------------------------------
+# Metrics
+# --------------------------------------------------------------------------------------------
+
+def _check_scores(scores, positive):
+    scores = np.asarray(scores, dtype=float).reshape(-1)
+    positive = np.asarray(positive, dtype=bool).reshape(-1)
+    if scores.shape != positive.shape:
+        raise InputError(f"scores and labels differ in length ({len(scores)} vs {len(positive)}).")
+    if not np.all(np.isfinite(scores)):
+        raise InputError("scores contain NaN or inf.")
+    n_pos = int(positive.sum())
+    if n_pos == 0 or n_pos == len(positive):
+        raise InputError("AUC needs at least one positive and one negative sample.")
+    return scores, positive
+
+
+def _tie_groups(scores, positive):
+    """Per distinct score, descending: (score, positives, negatives)."""
+    order = np.argsort(-scores, kind="stable")
+    s = scores[order]
+    p = positive[order]
+    start = np.flatnonzero(np.r_[True, s[1:] != s[:-1]])
+    pos = np.add.reduceat(p.astype(np.int64), start)
+    neg = np.diff(np.r_[start, len(s)]) - pos
+    return s[start], pos, neg
+
+
+def roc_curve(scores, positive) -> tuple:
+    """ROC curve of a score that should be high on positives.
+
+    One point per distinct score (ties move the curve diagonally), from (0, 0) to (1, 1).
+
+    Parameters
+    ----------
+    scores : (N,) float
+    positive : (N,) bool
+
+    Returns
+    -------
+    fpr, tpr : (M + 1,) float, false and true positive rates
+    thresholds : (M,) float, the distinct scores, descending (point i + 1 classifies score >= t_i
+        positive)
+    """
+    scores, positive = _check_scores(scores, positive)
+    thr, pos, neg = _tie_groups(scores, positive)
+    tpr = np.r_[0, np.cumsum(pos)] / pos.sum()
+    fpr = np.r_[0, np.cumsum(neg)] / neg.sum()
+    return fpr, tpr, thr
+
+
+def auc(scores, positive) -> float:
+    """Area under the ROC curve, exactly: P(score of a positive > score of a negative) + P(tie) / 2.
+
+    Computed from integer counts per tie group (the Mann-Whitney statistic), which equals the
+    trapezoid area under :func:`roc_curve`.
+    """
+    scores, positive = _check_scores(scores, positive)
+    _, pos, neg = _tie_groups(scores, positive)
+    neg_above = np.cumsum(neg) - neg  # negatives with a strictly higher score
+    n_pos, n_neg = int(pos.sum()), int(neg.sum())
+    # pairs (positive, negative) ranked wrongly, ties counted one half (integers x 2: exact)
+    wrong2 = int(np.sum(pos * (2 * neg_above + neg)))
+    return 1.0 - wrong2 / (2.0 * n_pos * n_neg)
+
+
+def trapezoid_auc(fpr, tpr) -> float:
+    """Trapezoid area under a piecewise linear ROC curve."""
+    fpr, tpr = np.asarray(fpr, float), np.asarray(tpr, float)
+    return float(np.sum(np.diff(fpr) * (tpr[1:] + tpr[:-1]) / 2))
+
+
+def confusion_matrix(truth, predicted, n_classes: int) -> np.ndarray:
+    """(n_classes, n_classes) int counts; rows true class, columns predicted class."""
+    truth = np.asarray(truth, dtype=np.int64).reshape(-1)
+    predicted = np.asarray(predicted, dtype=np.int64).reshape(-1)
+    if truth.shape != predicted.shape:
+        raise InputError("truth and predicted differ in length.")
+    for a, name in ((truth, "truth"), (predicted, "predicted")):
+        if a.size and (a.min() < 0 or a.max() >= n_classes):
+            raise InputError(f"{name} classes must lie in 0..{n_classes - 1}.")
+    return np.bincount(truth * n_classes + predicted, minlength=n_classes ** 2).reshape(
+        n_classes, n_classes)
+
+
+def iou_from_confusion(cm, classes=None) -> np.ndarray:
+    """Intersection over union TP / (TP + FP + FN) per class of a confusion matrix.
+
+    Parameters
+    ----------
+    cm : (K, K) counts, rows true, columns predicted.
+    classes : sequence of int, optional
+        Classes to report (default all). FP and FN count every row and column of ``cm``.
+
+    Returns
+    -------
+    (len(classes),) float; NaN for a class that is neither present nor predicted.
+    """
+    cm = np.asarray(cm, dtype=float)
+    classes = np.arange(len(cm)) if classes is None else np.asarray(classes)
+    tp = np.diag(cm)[classes]
+    fn = cm.sum(axis=1)[classes] - tp
+    fp = cm.sum(axis=0)[classes] - tp
+    den = tp + fp + fn
+    with np.errstate(invalid="ignore", divide="ignore"):
+        return np.where(den > 0, tp / np.where(den > 0, den, 1), np.nan)
+
+
+# --------------------------------------------------------------------------------------------
+# Scoring one map
+# --------------------------------------------------------------------------------------------
+
+def occupancy_score(m) -> np.ndarray:
+    """(n_cells,) score of occupancy of a map, higher = more likely occupied.
+
+    Binary maps: the Beta mean. Semantic maps: 1 - mean of free space. Log-odds maps
+    (:class:`hw4.logodds.LogOddsMap`): the log-odds itself (same order as the probability, but
+    without the ties that saturating ``1 / (1 + exp(-l))`` to exactly 0 or 1 would create).
+    """
+    if getattr(m, "logodds", None) is not None:
+        return np.asarray(m.logodds, dtype=float).reshape(-1)
+    mean = np.asarray(m.map["mean"], dtype=float)
+    if getattr(m, "semantic", False):
+        return 1.0 - mean[:, -1]
+    return mean.reshape(-1)
+
+
+def score_map(m, samples: HeldOut, keep_roc: bool = True) -> dict:
+    """Score one built map on held-out samples.
+
+    Parameters
+    ----------
+    m : a built map with ``.grid``, ``.observed`` (n_cells,) bool, ``.map['mean']`` (and
+        ``.map['alpha']``, ``.semantic`` for semantic maps), or a :class:`hw4.logodds.LogOddsMap`.
+    samples : HeldOut
+
+    Returns
+    -------
+    dict with
+        ``n_samples``, ``n_scored`` : samples in total, and in observed cells;
+        ``coverage`` : share of samples in observed cells (scored);
+        ``unobserved`` : share in unobserved cells or outside the map (not scored) = 1 - coverage;
+        ``coverage_occupied``, ``coverage_free`` : the same for end points / free samples only;
+        ``auc`` : ROC AUC of :func:`occupancy_score` on the scored samples;
+        ``fpr``, ``tpr`` : the ROC curve (when ``keep_roc``);
+        binary maps also: ``occupied_recall`` (scored end points with P(occupied) > 0.5) and
+        ``free_accuracy`` (scored free samples with P(occupied) <= 0.5), the map read at 0.5;
+        semantic maps also: ``accuracy`` (most likely class at scored labelled end points),
+        ``free_accuracy`` (scored free samples predicted free), ``occupied_recall`` (scored end
+        points predicted as any class but free), ``label_accuracy`` (correct class among those;
+        so accuracy = occupied_recall x label_accuracy), ``iou`` (6,) and ``miou``
+        (their mean; IoU from the end points' rows of the confusion matrix, a free prediction
+        counting as a miss), ``confusion`` (7, 7) counts over all scored samples, rows true
+        class (labels 1..6 then free), columns predicted.
+    """
+    cell = m.grid.nearest_cell(samples.points)
+    observed = np.asarray(m.observed, dtype=bool).reshape(-1)
+    scored = cell >= 0
+    scored[scored] = observed[cell[scored]]
+    occ = samples.occupied
+    out = {
+        "n_samples": int(len(cell)),
+        "n_scored": int(scored.sum()),
+        "coverage": float(scored.mean()),
+        "unobserved": float(1.0 - scored.mean()),
+        "coverage_occupied": float(scored[occ].mean()) if occ.any() else np.nan,
+        "coverage_free": float(scored[~occ].mean()) if (~occ).any() else np.nan,
+    }
+    score = occupancy_score(m)[cell[scored]]
+    truth = occ[scored]
+    out["auc"] = auc(score, truth)
+    if keep_roc:
+        out["fpr"], out["tpr"], _ = roc_curve(score, truth)
+    if not getattr(m, "semantic", False):  # the map read at probability 0.5 (log-odds 0)
+        called = score > (0.0 if getattr(m, "logodds", None) is not None else 0.5)
+        out["occupied_recall"] = float(called[truth].mean()) if truth.any() else np.nan
+        out["free_accuracy"] = float((~called[~truth]).mean()) if (~truth).any() else np.nan
+    if getattr(m, "semantic", False):
+        if not np.all(samples.label[occ] >= 1):
+            raise InputError("semantic scoring needs held-out samples from labelled (3xN) scans.")
+        pred = most_likely_class(np.asarray(m.map["alpha"]))[cell[scored]]
+        true_cls = samples.truth_class[scored]
+        k = N_LABELS + 1
+        cm = confusion_matrix(true_cls, pred, k)
+        ends = cm[:N_LABELS]
+        out["confusion"] = cm
+        out["accuracy"] = float(np.trace(ends[:, :N_LABELS]) / max(ends.sum(), 1))
+        out["free_accuracy"] = float(cm[N_LABELS, N_LABELS] / max(cm[N_LABELS].sum(), 1))
+        occ_pred = ends[:, :N_LABELS].sum()
+        out["label_accuracy"] = float(np.trace(ends[:, :N_LABELS]) / occ_pred) if occ_pred else np.nan
+        out["occupied_recall"] = float(occ_pred / max(ends.sum(), 1))
+        out["iou"] = iou_from_confusion(ends_only(cm), np.arange(N_LABELS))
+        out["miou"] = float(np.nanmean(out["iou"]))
+    return out
+
+
+def bootstrap_auc(maps, samples: HeldOut, n_boot: int = 200, seed: int = 0) -> dict:
+    """AUCs of several maps under resampling of the held-out *scans* (paired, seeded).
+
+    Samples from one scan are strongly correlated, so the unit of resampling is the scan: each
+    replicate draws the held-out scans with replacement and weights every sample by how often
+    its scan was drawn. All maps are scored on the samples that every one of them observes, so
+    their differences are paired.
+
+    Parameters
+    ----------
+    maps : sequence of built maps (see :func:`score_map`)
+    samples : HeldOut
+    n_boot : int
+        Replicates.
+    seed : int
+        Seed of ``numpy.random.default_rng``: the result is reproducible.
+
+    Returns
+    -------
+    dict with ``auc`` (n_maps,) on the common samples, ``replicates`` (n_boot, n_maps; NaN for
+    a replicate without positives or negatives) and
+    ``n_common`` (samples scored by every map).
+    """
+    cells = [m.grid.nearest_cell(samples.points) for m in maps]
+    common = np.ones(len(samples.points), dtype=bool)
+    for m, c in zip(maps, cells):
+        ok = c >= 0
+        ok[ok] = np.asarray(m.observed, bool).reshape(-1)[c[ok]]
+        common &= ok
+    positive = samples.occupied[common]
+    scans, scan_idx = np.unique(samples.scan[common], return_inverse=True)
+    prepared = []
+    for m, c in zip(maps, cells):
+        s = occupancy_score(m)[c[common]]
+        order = np.argsort(-s, kind="stable")
+        ss = s[order]
+        start = np.flatnonzero(np.r_[True, ss[1:] != ss[:-1]])
+        prepared.append((order, start))
+    rng = np.random.default_rng(seed)
+
+    def weighted(order, start, w):
+        wp = np.add.reduceat((w * positive)[order], start)
+        wn = np.add.reduceat((w * ~positive)[order], start)
+        above = np.cumsum(wn) - wn
+        den = wp.sum() * wn.sum()
+        return 1.0 - float(np.sum(wp * (above + wn / 2))) / den if den > 0 else np.nan
+
+    one = np.ones(len(positive))
+    base = np.array([weighted(o, s, one) for o, s in prepared])
+    reps = np.empty((n_boot, len(maps)))
+    for b in range(n_boot):
+        draw = np.bincount(rng.integers(0, len(scans), len(scans)), minlength=len(scans))
+        w = draw[scan_idx].astype(float)
+        reps[b] = [weighted(o, s, w) for o, s in prepared]
+    return {"auc": base, "replicates": reps, "n_common": int(common.sum())}
+
+
+def ends_only(cm) -> np.ndarray:
+    """The confusion matrix with the free-space row zeroed: end points only (what IoU uses)."""
+    cm = np.array(cm, copy=True)
+    cm[N_LABELS:] = 0
+    return cm
+
+
+# --------------------------------------------------------------------------------------------
+# All models x grid sizes
+# --------------------------------------------------------------------------------------------
+
+BASELINE = "log-odds"
+MODEL_NAMES = {0: BASELINE, 1: "CSM", 2: "Continuous CSM", 3: "S-CSM", 4: "Continuous S-CSM"}
+COLUMNS = ("model", "task", "grid_size", "auc", "coverage", "unobserved", "occupied_recall",
+           "free_accuracy", "accuracy", "label_accuracy", "miou", "n_scored", "build_seconds")
+
+
+@dataclass
+class Split:
+    """A mapping / held-out split of the Intel data with its held-out samples (both datasets)."""
+    mapping: np.ndarray
+    held_out: np.ndarray
+    samples: HeldOut           # from the semantic scans: labels on end points
+    every: int = HOLD_OUT_EVERY
+
+
+_split_cache: dict = {}
+
+
+def intel_split(every: int = HOLD_OUT_EVERY, offset: int | None = None, step: float = FREE_STEP,
+                margin: float = FREE_MARGIN) -> Split:
+    """The default held-out split of the Intel data and its samples (cached per process).
+
+    The binary and semantic Intel files hold the same poses and beam end points (the semantic one
+    adds the label row), so one sample set, taken from the semantic file, scores every model.
+    """
+    from .tasks import load_task_data
+    key = (every, offset, step, margin)
+    if key not in _split_cache:
+        sem = load_task_data(3)
+        mapping, held = split_scans(len(sem.scans), every, offset)
+        _split_cache[key] = Split(mapping, held, held_out_samples(sem, held, step, margin), every)
+    return _split_cache[key]
+
+
+def mapping_data(task: int, split: Split) -> _data.IntelData:
+    """The mapping scans of the data task ``task`` uses (semantic copy for tasks 3, 4)."""
+    from .tasks import load_task_data
+    return subset(load_task_data(task), split.mapping)
+
+
+def build_eval_map(task: int, grid_size: float, split: Split | None = None, **kw):
+    """Build the map of task 1..4, or the log-odds baseline (``task=0``), from the mapping scans."""
+    from .tasks import build_map
+    split = split or intel_split()
+    if task == 0:
+        from .logodds import build_logodds
+        return build_logodds(grid_size, mapping_data(1, split), **kw)
+    return build_map(task, grid_size, data=mapping_data(task, split), **kw)
+
+
+def evaluate_all(grid_sizes=GRID_SIZES, tasks=(1, 2, 3, 4), baseline: bool = True,
+                 split: Split | None = None, keep_roc: bool = True, progress: bool = False,
+                 **model_kw) -> list:
+    """Evaluate every model at every grid size (plus the log-odds baseline) on held-out scans.
+
+    Parameters
+    ----------
+    grid_sizes : sequence of float [m]
+        Cell sizes (default the homework's 0.135, 0.27, 0.5).
+    tasks : sequence of int
+        Homework tasks 1..4 (CSM, continuous CSM, S-CSM, continuous S-CSM).
+    baseline : bool
+        Add the classical log-odds grid (:mod:`hw4.logodds`) at every grid size, as ``task`` 0.
+    split : Split, optional
+        Mapping / held-out split and samples (default :func:`intel_split`: every 10th scan held
+        out, free samples every 0.1 m up to 0.25 m before the end point).
+    keep_roc : bool
+        Keep each row's ROC curve (``fpr``, ``tpr`` arrays) for plotting.
+    progress : bool
+        Print one line per map.
+    **model_kw
+        Passed to every model (e.g. ``nearest_poses=None``); continuous-only keywords (``l``,
+        ``sigma``, ``beams``, ``sample_step``) go to tasks 2 and 4 only.
+
+    Returns
+    -------
+    list of dict, one row per (model, grid size): for each grid size in order, the baseline
+    (``task`` 0, if asked) then the tasks in order. Keys: those of :data:`COLUMNS` (``accuracy``,
+    ``label_accuracy`` and ``miou`` are NaN for the binary maps) plus the extra keys of
+    :func:`score_map` (``fpr``, ``tpr`` when ``keep_roc``; ``iou`` (6,) and ``confusion`` (7, 7)
+    for the semantic maps; ``n_samples``, ``coverage_occupied``, ``coverage_free``).
+    ``model`` is the display name (:data:`MODEL_NAMES`). Use :func:`as_array` for a structured
+    array, :func:`glue_rows` / :func:`myst_table` for the book, :func:`markdown_table` to print.
+    """
+    split = split or intel_split()
+    cont_only = {"l", "sigma", "beams", "sample_step"}
+    rows = []
+    for g in grid_sizes:
+        for task in ((0,) if baseline else ()) + tuple(tasks):
+            kw = {k: v for k, v in model_kw.items() if task in (2, 4) or k not in cont_only}
+            t0 = time.perf_counter()
+            m = build_eval_map(task, g, split, **kw)
+            build = time.perf_counter() - t0
+            row = {"model": MODEL_NAMES[task], "task": task, "grid_size": float(g),
+                   "accuracy": np.nan, "miou": np.nan, "free_accuracy": np.nan,
+                   "label_accuracy": np.nan, "occupied_recall": np.nan,
+                   "build_seconds": build}
+            row.update(score_map(m, split.samples, keep_roc=keep_roc))
+            rows.append(row)
+            if progress:
+                print(f"{row['model']:>17s} g={g:<5} AUC {row['auc']:.3f} "
+                      f"coverage {row['coverage']:.3f} mIoU {row['miou']:.3f}", flush=True)
+    return rows
+
+
+def as_array(rows, columns=COLUMNS) -> np.ndarray:
+    """The scalar columns of :func:`evaluate_all` rows as a numpy structured array."""
+    kinds = {"model": "U20", "task": "i8", "n_scored": "i8"}
+    dtype = [(c, kinds.get(c, "f8")) for c in columns]
+    return np.array([tuple(r[c] for c in columns) for r in rows], dtype=dtype)
+
+
+def select(rows, **where) -> list:
+    """Rows whose keys equal the given values, e.g. ``select(rows, task=2, grid_size=0.27)``."""
+    return [r for r in rows if all(np.isclose(r[k], v) if isinstance(v, float) else r[k] == v
+                                   for k, v in where.items())]
+
+
+def glue_key(row: dict, metric: str, prefix: str = "") -> str:
+    """A glue name for one number of a row, e.g. ``auc_t2_g0135`` (task 0 is the baseline)."""
+    return f"{prefix}{metric}_t{row['task']}_g{str(row['grid_size']).replace('.', '')}"
+
+
+GLUE_METRICS = ("auc", "coverage", "unobserved", "occupied_recall", "free_accuracy", "accuracy",
+                "miou", "label_accuracy")
+
+
+def glue_rows(rows, glue, metrics=GLUE_METRICS, prefix: str = "", digits: int = 6) -> list:
+    """Glue every finite metric of every row under :func:`glue_key` names; return the names.
+
+    ``glue`` is ``myst_nb.glue`` (passed in, so the package does not depend on myst-nb). Values are
+    rounded to ``digits`` decimals so that the stored text does not hinge on the last bit.
+    """
+    names = []
+    for r in rows:
+        for m in metrics:
+            v = r.get(m, np.nan)
+            if np.isfinite(v):
+                name = glue_key(r, m, prefix)
+                glue(name, round(float(v), digits), display=False)
+                names.append(name)
+    return names
+
+
+def myst_table(rows, columns=("model", "grid_size", "auc", "coverage", "occupied_recall",
+                              "free_accuracy", "accuracy", "miou"), fmt: str = ".3f",
+               prefix: str = "") -> str:
+    """MyST source of a pipe table whose numbers are ``{glue:text}`` references (see :func:`glue_rows`).
+
+    Paste it into a *markdown* cell (after gluing the rows with the same ``prefix``): it renders
+    in HTML and PDF alike, and every number in it comes from the code. Missing values show a dash.
+    """
+    heads = _HEADS
+    lines = ["| " + " | ".join(heads.get(c, c) for c in columns) + " |",
+             "|" + "|".join(":--" if c == "model" else "--:" for c in columns) + "|"]
+    for r in rows:
+        cells = []
+        for c in columns:
+            v = r[c]
+            if c == "model":
+                cells.append(str(v))
+            elif c == "grid_size":
+                cells.append(f"{v:g}")
+            elif isinstance(v, (float, np.floating)) and not np.isfinite(v):
+                cells.append("–")
+            else:
+                cells.append(f"{{glue:text}}`{glue_key(r, c, prefix)}:{fmt}`")
+        lines.append("| " + " | ".join(cells) + " |")
+    return "\n".join(lines)
+
+
+_HEADS = {"model": "model", "task": "task", "grid_size": "grid [m]", "auc": "AUC",
+          "coverage": "coverage", "unobserved": "unobserved", "accuracy": "accuracy",
+          "miou": "mIoU", "free_accuracy": "free acc.", "n_scored": "scored samples",
+          "build_seconds": "build [s]", "label_accuracy": "label acc.",
+          "occupied_recall": "occ. recall", "occupied_kept": "hits kept",
+          "free_kept": "free evidence kept"}
+
+
+def markdown_table(rows, columns=("model", "grid_size", "auc", "coverage", "occupied_recall",
+                                  "free_accuracy", "accuracy", "miou"), digits: int = 3) -> str:
+    """A Markdown table of the rows with the numbers written out (NaN shown as a dash).
+
+    For printing and for notebooks. Note: myst-nb renders a ``text/markdown`` *output* as
+    CommonMark, which has no tables, unless the book sets ``nb_render_markdown_format: myst``;
+    for the book, prefer :func:`myst_table` in a markdown cell.
+    """
+    heads = _HEADS
+
+    def fmt(c, v):
+        if isinstance(v, str):
+            return v
+        if c == "grid_size":
+            return f"{v:g}"
+        if c in ("task", "n_scored"):
+            return f"{int(v):,}"
+        return "–" if not np.isfinite(v) else f"{v:.{digits}f}"
+
+    lines = ["| " + " | ".join(heads.get(c, c) for c in columns) + " |",
+             "|" + "|".join(":--" if c == "model" else "--:" for c in columns) + "|"]
+    lines += ["| " + " | ".join(fmt(c, r[c]) for c in columns) + " |" for r in rows]
+    return "\n".join(lines)

@@ -1,0 +1,284 @@
+"""Held-out evaluation: metrics on hand-made cases with known answers, split, samples, coverage."""
+from __future__ import annotations
+
+import itertools
+from types import SimpleNamespace
+
+import numpy as np
+import pytest
+
+from hw4 import evaluate as ev
+from hw4.data import IntelData
+from hw4.errors import InputError
+from hw4.evidence import count_evidence
+from hw4.grid import Grid
+
+
+# ---------------------------------------------------------------- AUC and ROC, exact cases
+def brute_auc(scores, positive):
+    """P(positive scores higher) + P(tie) / 2 over all (positive, negative) pairs."""
+    pos = [s for s, p in zip(scores, positive) if p]
+    neg = [s for s, p in zip(scores, positive) if not p]
+    total = sum(1.0 if a > b else 0.5 if a == b else 0.0 for a, b in itertools.product(pos, neg))
+    return total / (len(pos) * len(neg))
+
+
+def test_auc_perfectly_separated_is_one_and_reversed_is_zero():
+    s = np.array([0.1, 0.2, 0.3, 0.7, 0.8, 0.9])
+    y = np.array([0, 0, 0, 1, 1, 1], bool)
+    assert ev.auc(s, y) == 1.0
+    assert ev.auc(s, ~y) == 0.0
+    assert ev.auc(-s, y) == 0.0
+
+
+def test_auc_all_tied_is_one_half():
+    assert ev.auc(np.full(7, 0.3), np.array([1, 0, 0, 1, 0, 1, 1], bool)) == 0.5
+    fpr, tpr, thr = ev.roc_curve(np.full(4, 2.0), np.array([1, 0, 1, 0], bool))
+    np.testing.assert_array_equal(fpr, [0, 1])
+    np.testing.assert_array_equal(tpr, [0, 1])
+    np.testing.assert_array_equal(thr, [2.0])
+
+
+def test_auc_two_by_two_hand_cases():
+    # positives 0.8, 0.4; negatives 0.6, 0.2: pairs won 0.8>0.6, 0.8>0.2, 0.4>0.2, lost 0.4<0.6
+    assert ev.auc([0.8, 0.4, 0.6, 0.2], [1, 1, 0, 0]) == 0.75
+    # positives 0.5, 0.9; negatives 0.5, 0.1: one tie (1/2) and three wins -> 3.5 / 4
+    assert ev.auc([0.5, 0.9, 0.5, 0.1], [1, 1, 0, 0]) == 0.875
+
+
+def test_roc_curve_of_a_hand_case():
+    fpr, tpr, thr = ev.roc_curve([0.8, 0.4, 0.6, 0.2], [1, 1, 0, 0])
+    np.testing.assert_array_equal(thr, [0.8, 0.6, 0.4, 0.2])
+    np.testing.assert_array_equal(fpr, [0, 0, 0.5, 0.5, 1])
+    np.testing.assert_array_equal(tpr, [0, 0.5, 0.5, 1, 1])
+    assert ev.trapezoid_auc(fpr, tpr) == 0.75
+
+
+def test_auc_equals_pair_count_and_roc_trapezoid_with_many_ties():
+    rng = np.random.default_rng(5)
+    for _ in range(20):
+        n = int(rng.integers(2, 60))
+        y = rng.random(n) < 0.4
+        y[0], y[1] = True, False
+        s = np.round(rng.normal(size=n) + y, 1)  # rounding makes ties
+        a = ev.auc(s, y)
+        assert a == pytest.approx(brute_auc(s, y), abs=1e-15)
+        fpr, tpr, _ = ev.roc_curve(s, y)
+        assert ev.trapezoid_auc(fpr, tpr) == pytest.approx(a, abs=1e-12)
+        assert fpr[0] == tpr[0] == 0 and fpr[-1] == tpr[-1] == 1
+        assert np.all(np.diff(fpr) >= 0) and np.all(np.diff(tpr) >= 0)
+        assert ev.auc(np.exp(3 * s), y) == a  # rank statistic: any increasing map
+
+
+def test_auc_refuses_one_class_and_nan():
+    with pytest.raises(InputError):
+        ev.auc([0.1, 0.2], [1, 1])
+    with pytest.raises(InputError):
+        ev.auc([0.1, np.nan], [1, 0])
+    with pytest.raises(InputError):
+        ev.auc([0.1, 0.2, 0.3], [1, 0])
+
+
+# ---------------------------------------------------------------- confusion and IoU
+def test_confusion_matrix_and_iou_of_a_hand_case():
+    truth = [0, 0, 0, 0, 0, 0, 1, 1, 1, 1, 1, 1, 2, 2, 2, 2]
+    pred = [0, 0, 0, 0, 0, 1, 0, 0, 1, 1, 1, 2, 2, 2, 2, 2]
+    cm = ev.confusion_matrix(truth, pred, 3)
+    np.testing.assert_array_equal(cm, [[5, 1, 0], [2, 3, 1], [0, 0, 4]])
+    # IoU = TP / (TP + FP + FN): 5 / (5 + 2 + 1), 3 / (3 + 1 + 3), 4 / (4 + 1 + 0)
+    np.testing.assert_allclose(ev.iou_from_confusion(cm), [5 / 8, 3 / 7, 4 / 5], rtol=1e-15)
+    np.testing.assert_allclose(ev.iou_from_confusion(cm, [2]), [4 / 5], rtol=1e-15)
+    # a class neither present nor predicted has no IoU
+    assert np.isnan(ev.iou_from_confusion(np.diag([3, 0]))[1])
+    with pytest.raises(InputError):
+        ev.confusion_matrix([0, 3], [0, 1], 3)
+
+
+# ---------------------------------------------------------------- split and samples
+def test_split_is_deterministic_and_partitions_the_scans():
+    a_map, a_held = ev.split_scans(743)
+    b_map, b_held = ev.split_scans(743)
+    np.testing.assert_array_equal(a_held, b_held)
+    np.testing.assert_array_equal(a_map, b_map)
+    np.testing.assert_array_equal(a_held, np.arange(9, 743, 10))
+    assert len(a_held) == 74 and len(a_map) == 669
+    np.testing.assert_array_equal(np.sort(np.r_[a_map, a_held]), np.arange(743))
+    _, h = ev.split_scans(20, every=5, offset=0)
+    np.testing.assert_array_equal(h, [0, 5, 10, 15])
+    for bad in (1, 0, 2.5, True):
+        with pytest.raises(InputError):
+            ev.split_scans(10, every=bad)
+    with pytest.raises(InputError):
+        ev.split_scans(10, every=5, offset=5)
+
+
+def test_held_out_samples_of_one_beam():
+    """Robot at (1, 2) facing +y; one beam 1 m straight ahead: end point (1, 3)."""
+    data = IntelData(np.array([[1.0, 2.0, np.pi / 2]]), [np.array([[1.0], [0.0], [4.0]])])
+    s = ev.held_out_samples(data, [0], step=0.25, margin=0.25)
+    # occupied: the end point; free: s = 0.25, 0.5 (s < 1 - 0.25 strictly, so not 0.75)
+    assert s.n_occupied == 1 and s.n_free == 2
+    np.testing.assert_allclose(s.points[s.occupied], [[1.0, 3.0]], atol=1e-15)
+    np.testing.assert_allclose(s.points[~s.occupied], [[1.0, 2.25], [1.0, 2.5]], atol=1e-15)
+    np.testing.assert_array_equal(s.label, [4, 0, 0])
+    np.testing.assert_array_equal(s.truth_class, [3, ev.N_LABELS, ev.N_LABELS])
+    np.testing.assert_array_equal(s.scan, [0, 0, 0])
+
+
+def test_held_out_samples_skip_max_range_end_points_and_short_beams():
+    scan = np.array([[0.2, 30.0, 0.0], [0.0, 0.0, 2.0]])  # 0.2 m, max range, 2 m
+    data = IntelData(np.array([[0.0, 0.0, 0.0]]), [scan])
+    s = ev.held_out_samples(data, [0])
+    # 0.2 m beam: end point, no free sample (0.1 is not < 0.2 - 0.25); 30 m beam: free samples
+    # only; 2 m beam: end point and 0.1 .. 1.7 (17 samples)
+    assert s.n_occupied == 2
+    assert s.n_free == 297 + 17
+    r = np.hypot(*s.points[~s.occupied].T)
+    assert r.max() < 30 - 0.25 and r.min() == pytest.approx(0.1)
+
+
+# ---------------------------------------------------------------- coverage and scoring
+def _toy_map(observed, mean, semantic_alpha=None):
+    grid = Grid(1.0, (0.0, 2.0), (0.0, 0.0 + 1.0))  # x 0, 1, 2; y 0, 1: 6 cells
+    m = SimpleNamespace(grid=grid, observed=np.asarray(observed, bool),
+                        map={"mean": np.asarray(mean, float).reshape(-1, 1)}, semantic=False)
+    if semantic_alpha is not None:
+        a = np.asarray(semantic_alpha, float)
+        m.semantic = True
+        m.map = {"alpha": a, "mean": a / a.sum(axis=1, keepdims=True)}
+    return m
+
+
+def test_unobserved_cells_are_counted_but_not_scored():
+    # cells: 0 (0,0) 1 (1,0) 2 (2,0) 3 (0,1) 4 (1,1) 5 (2,1); cell 5 unobserved
+    m = _toy_map([1, 1, 1, 1, 1, 0], [0.9, 0.2, 0.8, 0.1, 0.3, 0.99])
+    pts = np.array([[0, 0], [2, 0], [1, 0], [0, 1], [1.1, 1.2], [2, 1], [2.1, 0.9], [9, 9]])
+    occ = np.array([1, 1, 0, 0, 0, 1, 0, 1], bool)
+    s = ev.HeldOut(pts, occ, np.zeros(8, np.int64), np.zeros(8, np.int64))
+    r = ev.score_map(m, s)
+    # scored: the first five (cells 0, 2, 1, 3, 4); cell 5 (twice) and outside the map are not
+    assert r["n_samples"] == 8 and r["n_scored"] == 5
+    assert r["coverage"] == 5 / 8 and r["unobserved"] == 3 / 8
+    assert r["coverage_occupied"] == 2 / 4 and r["coverage_free"] == 3 / 4
+    # scored positives 0.9, 0.8 above every scored negative 0.2, 0.1, 0.3: AUC 1; the unobserved
+    # cell's 0.99 on a free sample would have lowered it, had it been scored
+    assert r["auc"] == 1.0
+    np.testing.assert_array_equal(r["tpr"][[0, -1]], [0, 1])
+
+
+def test_semantic_scores_of_a_hand_case():
+    # 6 cells x 7 classes (labels 1..6, free last); predicted: cell 0 label 1, cell 1 label 2,
+    # cell 2 free, cell 3 label 1, cell 4 free, cell 5 unobserved
+    alpha = np.full((6, 7), 1e-3)
+    alpha[0, 0] = alpha[1, 1] = alpha[2, 6] = alpha[3, 0] = alpha[4, 6] = 5.0
+    m = _toy_map([1, 1, 1, 1, 1, 0], np.zeros(6), semantic_alpha=alpha)
+    pts = np.array([[0, 0], [1, 0], [2, 0], [0, 1], [1, 1], [2, 1], [1, 0], [1, 1]])
+    occ = np.array([1, 1, 1, 1, 0, 1, 0, 0], bool)
+    lab = np.array([1, 1, 2, 1, 0, 3, 0, 0])
+    s = ev.HeldOut(pts, occ, lab, np.zeros(8, np.int64))
+    r = ev.score_map(m, s)
+    # scored end points: (true 1 -> 1), (true 1 -> 2), (true 2 -> free), (true 1 -> 1)
+    assert r["accuracy"] == 2 / 4
+    assert r["occupied_recall"] == 3 / 4 and r["label_accuracy"] == 2 / 3
+    # scored free samples: cell 4 -> free, cell 1 -> label 2 (wrong), cell 4 -> free
+    assert r["free_accuracy"] == 2 / 3
+    cm = r["confusion"]
+    assert cm[0, 0] == 2 and cm[0, 1] == 1 and cm[1, 6] == 1 and cm[6, 6] == 2 and cm[6, 1] == 1
+    assert cm.sum() == 7
+    # IoU from the end points only: label 1: 2 / (2 + 0 + 1); label 2: 0 / (0 + 1 + 1);
+    # labels 3..6 absent and never predicted at end points: NaN, left out of the mean
+    np.testing.assert_allclose(r["iou"][:2], [2 / 3, 0.0])
+    assert np.all(np.isnan(r["iou"][2:]))
+    assert r["miou"] == pytest.approx(1 / 3)
+
+
+# ---------------------------------------------------------------- the Intel pipeline
+def test_intel_split_samples_come_from_held_out_scans_only():
+    sp = ev.intel_split()
+    assert set(np.unique(sp.samples.scan)) == set(sp.held_out.tolist())
+    assert not set(sp.mapping.tolist()) & set(sp.held_out.tolist())
+    assert sp.samples.n_occupied > 10_000 and sp.samples.n_free > 20 * sp.samples.n_occupied
+    assert np.all((sp.samples.label[sp.samples.occupied] >= 1)
+                  & (sp.samples.label[sp.samples.occupied] <= 6))
+    d = ev.mapping_data(1, sp)
+    assert len(d.scans) == len(sp.mapping) and d.scans[0].shape[0] == 2
+
+
+def test_evaluate_all_rows_at_the_coarse_grid():
+    rows = ev.evaluate_all(grid_sizes=(0.5,), tasks=(1, 3))
+    assert [r["model"] for r in rows] == ["log-odds", "CSM", "S-CSM"]
+    for r in rows:
+        assert 0.5 < r["auc"] <= 1 and 0.9 < r["coverage"] <= 1
+        assert r["coverage"] + r["unobserved"] == pytest.approx(1)
+    # the discrete CSM and S-CSM see the same hits and passes; their occupancy scores differ
+    # only through the prior (one occupied pseudo-count vs six class pseudo-counts)
+    assert rows[1]["auc"] == pytest.approx(rows[2]["auc"], abs=1e-3)
+    assert np.isnan(rows[1]["miou"]) and 0 < rows[2]["miou"] < 1
+    arr = ev.as_array(rows)
+    assert arr["auc"][1] == rows[1]["auc"] and arr["model"][0] == "log-odds"
+    table = ev.markdown_table(rows)
+    assert table.count("\n") == 4 and "| log-odds | 0.5 |" in table
+    assert ev.glue_key(rows[1], "auc") == "auc_t1_g05"
+    assert ev.select(rows, task=3, grid_size=0.5) == [rows[2]]
+
+
+def test_sigma_scaling_used_by_the_kernel_study_is_exact():
+    from hw4.tasks import load_task_data
+    d = load_task_data(2)
+    scans = [s[:2] for s in d.scans[:60]]
+    g = Grid(0.5)
+    a = count_evidence(g, d.poses[:60], scans, model="continuous", sigma0=0.1)
+    b = count_evidence(g, d.poses[:60], scans, model="continuous", sigma0=1.0)
+    np.testing.assert_allclose(b, a * 10.0, rtol=1e-12, atol=0)
+
+
+def test_incremental_growth_is_the_batch_map():
+    from hw4.growth import incremental_counts
+    from hw4.tasks import load_task_data
+    d = load_task_data(4)
+    d = IntelData(d.poses[:60], d.scans[:60])
+    steps = [(n, c.copy()) for n, _, c in incremental_counts(d, every=25, grid_size=0.5)]
+    assert [n for n, _ in steps] == [25, 50, 60]
+    batch = count_evidence(Grid(0.5, n_classes=7), d.poses, d.scans, model="continuous",
+                           semantic=True, nearest_poses=None, beams="all")
+    np.testing.assert_allclose(steps[-1][1], batch, rtol=1e-12, atol=1e-12)
+    with pytest.raises(InputError):
+        next(incremental_counts(d, nearest_poses=16))
+
+
+def test_bootstrap_without_resampling_weights_is_the_plain_auc():
+    m1 = _toy_map([1, 1, 1, 1, 1, 0], [0.9, 0.2, 0.8, 0.1, 0.3, 0.99])
+    m2 = _toy_map([1, 1, 1, 1, 1, 1], [0.1, 0.2, 0.8, 0.1, 0.3, 0.99])
+    pts = np.array([[0, 0], [2, 0], [1, 0], [0, 1], [1.1, 1.2], [2, 1], [2.1, 0.9], [9, 9]])
+    occ = np.array([1, 1, 0, 0, 0, 1, 0, 1], bool)
+    s = ev.HeldOut(pts, occ, np.zeros(8, np.int64), np.array([0, 1, 2, 0, 1, 2, 0, 1]))
+    b = ev.bootstrap_auc([m1, m2], s, n_boot=30, seed=3)
+    # common samples: the five in observed cells of m1 (m2 observes everything)
+    assert b["n_common"] == 5
+    assert b["auc"][0] == 1.0
+    # m2 on those five: positives 0.1, 0.8 vs negatives 0.2, 0.1, 0.3 -> (0 + 0.5 + 0) + 3 = 3.5 / 6
+    assert b["auc"][1] == pytest.approx(3.5 / 6)
+    again = ev.bootstrap_auc([m1, m2], s, n_boot=30, seed=3)
+    np.testing.assert_array_equal(b["replicates"], again["replicates"])
+
+
+def test_binary_maps_read_at_one_half():
+    m = _toy_map([1, 1, 1, 1, 1, 0], [0.9, 0.2, 0.5, 0.1, 0.6, 0.99])
+    pts = np.array([[0, 0], [2, 0], [1, 0], [0, 1], [1, 1], [2, 1]])
+    occ = np.array([1, 1, 0, 0, 0, 1], bool)
+    r = ev.score_map(m, ev.HeldOut(pts, occ, np.zeros(6, np.int64), np.zeros(6, np.int64)))
+    # scored end points 0.9 (called occupied) and 0.5 (not: > 0.5 is occupied); free 0.2, 0.1, 0.6
+    assert r["occupied_recall"] == 0.5 and r["free_accuracy"] == 2 / 3
+
+
+def test_glue_rows_and_myst_table_agree_on_names():
+    rows = [{"model": "CSM", "task": 1, "grid_size": 0.27, "auc": 0.91, "coverage": 0.99,
+             "occupied_recall": 0.8, "free_accuracy": 0.95, "accuracy": np.nan, "miou": np.nan}]
+    glued = {}
+    names = ev.glue_rows(rows, lambda n, v, display: glued.update({n: v}))
+    assert glued == {"auc_t1_g027": 0.91, "coverage_t1_g027": 0.99,
+                     "occupied_recall_t1_g027": 0.8, "free_accuracy_t1_g027": 0.95}
+    assert names == list(glued)
+    table = ev.myst_table(rows)
+    assert "{glue:text}`auc_t1_g027:.3f`" in table and table.endswith("| – | – |")
+    assert all(f"`{n}:.3f`" in table for n in names)
