@@ -1,0 +1,46 @@
+#!/usr/bin/env bash
+# The README's "test" command: set up, fetch the data, run the unit tests, re-execute every
+# notebook with nbval (stored outputs must match what the code produces now), then build the
+# book (HTML and PDF) with Sphinx warnings as errors. Exits non-zero on any failure.
+set -eo pipefail
+cd "$(dirname "${BASH_SOURCE[0]}")"
+bash scripts/setup.sh
+# shellcheck disable=SC1091
+source .venv/bin/activate
+# Deterministic re-execution: one BLAS thread, fixed hash seed, no stdin.
+export OMP_NUM_THREADS=1 OPENBLAS_NUM_THREADS=1 MKL_NUM_THREADS=1 PYTHONHASHSEED=0
+
+stage() { echo; echo "== $1 ($(date -u +%H:%M:%S))"; }
+
+# pytest exit codes: 0 passed, 5 collected nothing (a failure here), anything else failed.
+run_pytest() {
+    local rc=0
+    python -m pytest -p no:cacheprovider "$@" </dev/null || rc=$?
+    if [ "$rc" -eq 5 ]; then
+        echo "test: pytest collected no tests ($*); that is a failure." >&2
+        exit 1
+    elif [ "$rc" -ne 0 ]; then
+        echo "test: pytest failed with exit code $rc ($1 ...)." >&2
+        exit "$rc"
+    fi
+}
+
+stage "data"
+python -m hw4 data
+
+stage "unit tests"
+MPLBACKEND=Agg run_pytest tests
+
+stage "notebooks (nbval re-executes each one and compares its stored outputs)"
+notebooks=()
+for nb in notebooks/*.ipynb book/*.ipynb; do [ -e "$nb" ] && notebooks+=("$nb"); done
+# The kernels draw with matplotlib's inline backend, as Jupyter does, so that every figure the
+# notebook stores is produced again (Agg would draw nothing and nbval would see outputs missing).
+MPLBACKEND=module://matplotlib_inline.backend_inline run_pytest "${notebooks[@]}" \
+    --nbval --nbval-current-env --nbval-sanitize-with tests/nbval_sanitize.cfg \
+    --nbval-cell-timeout 600
+
+stage "book (HTML and PDF, Sphinx warnings as errors)"
+bash scripts/build_book.sh all
+
+stage "done"
