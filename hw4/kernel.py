@@ -30,12 +30,34 @@ def sparse_kernel(d, sigma0: float = SIGMA0, l: float = LENGTH):
     Returns
     -------
     ndarray, same shape as ``d``: kernel weights (0 where d >= l).
-
-    Just below ``l`` the kernel is of order (1 - d/l)^3 and rounding can make it about -1e-17;
-    it is clamped at 0 so that evidence never decreases.
     """
     d = np.asarray(d, dtype=float)
-    u = d / l
-    k = sigma0 * ((2.0 + np.cos(2.0 * np.pi * u)) * (1.0 - u) / 3.0
-                  + np.sin(2.0 * np.pi * u) / (2.0 * np.pi))
-    return np.where(d < l, np.maximum(k, 0.0), 0.0)
+    inside = d < l
+    k = np.zeros(d.shape)
+    k[inside] = sparse_kernel_inside(d[inside], sigma0, l)
+    return k
+
+
+def sparse_kernel_inside(d: np.ndarray, sigma0: float = SIGMA0, l: float = LENGTH) -> np.ndarray:
+    """The sparse kernel for distances already known to be below ``l``, overwriting ``d``.
+
+    The fast path for large batches (3D BKI): no mask, few temporaries. Just below ``l`` the
+    kernel is of order (1 - d/l)^3 and rounding can make it about -1e-17; it is clamped at 0 so
+    that evidence never decreases.
+
+    Parameters
+    ----------
+    d : (P,) float array [m], all < l; overwritten (pass a copy to keep it)
+    """
+    t = np.multiply(d, 2.0 * np.pi / l)
+    c = np.cos(t)
+    c += 2.0
+    np.multiply(d, -1.0 / (3.0 * l), out=d)
+    d += 1.0 / 3.0
+    c *= d
+    np.sin(t, out=t)
+    t *= 1.0 / (2.0 * np.pi)
+    c += t
+    c *= sigma0
+    np.maximum(c, 0.0, out=c)
+    return c

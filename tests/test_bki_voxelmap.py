@@ -9,8 +9,9 @@ from bki_literal import literal_posterior, literal_update
 from bki_literal import sparse_kernel as literal_kernel
 
 from hw4.bki import VoxelMap
-from hw4.bki.voxelmap import FREE, OCCUPIED, UNKNOWN, fast_kernel, kernel_reach
+from hw4.bki.voxelmap import FREE, OCCUPIED, UNKNOWN, kernel_reach
 from hw4.kernel import sparse_kernel
+from hw4.kernel import sparse_kernel_inside as fast_kernel
 
 SF2, ELL = 10.0, 0.3
 

@@ -24,6 +24,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import InputError
+from ..kernel import sparse_kernel_inside
 
 B = 4                    # block edge [voxels]
 B3 = B ** 3
@@ -59,30 +60,6 @@ def kernel_reach(resolution: float, ell: float) -> int:
     distance test ``d < ell`` decides).
     """
     return int(np.floor(ell / resolution + 0.5))
-
-
-def fast_kernel(d: np.ndarray, sf2: float, ell: float) -> np.ndarray:
-    """The sparse kernel of :func:`hw4.kernel.sparse_kernel` for ``d < ell``, computed in place.
-
-    Clamped at 0: just below ``ell`` the kernel is ``O((1 - d / ell)^5)`` and rounding can make it
-    slightly negative (the reference clamps too).
-
-    Parameters
-    ----------
-    d : (P,) float array [m], distances, all ``< ell`` (overwritten)
-    """
-    t = np.multiply(d, 2.0 * np.pi / ell)
-    c = np.cos(t)
-    c += 2.0
-    np.multiply(d, -1.0 / (3.0 * ell), out=d)
-    d += 1.0 / 3.0
-    c *= d
-    np.sin(t, out=t)
-    t *= 1.0 / (2.0 * np.pi)
-    c += t
-    c *= sf2
-    np.maximum(c, 0.0, out=c)
-    return c
 
 
 @dataclass
@@ -244,7 +221,7 @@ class VoxelMap:
             code = (parts[:, 0, :, None, None] + parts[:, 1, None, :, None]) + parts[:, 2, None, None, :]
             out_code.append(code.reshape(-1)[idx])
             out_cls.append(labels[s:s + step][idx // m ** 3])
-            out_w.append(fast_kernel(np.sqrt(d2.reshape(-1)[idx]), self.sf2, self.ell))
+            out_w.append(sparse_kernel_inside(np.sqrt(d2.reshape(-1)[idx]), self.sf2, self.ell))
         if len(out_code) == 1:
             return out_code[0], out_cls[0], out_w[0]
         return np.concatenate(out_code), np.concatenate(out_cls), np.concatenate(out_w)
