@@ -83,7 +83,7 @@ def plot_confusion(cm, ax=None, title=None, normalize: bool = True, colorbar: bo
         for j in range(len(cm)):
             v = show[i, j]
             txt = f"{100 * v:.0f}" if normalize else f"{int(cm[i, j])}"
-            ax.text(j, i, txt, ha="center", va="center", fontsize=7,
+            ax.text(j, i, txt, ha="center", va="center", fontsize=9,
                     color="white" if (normalize and v > 0.5) else "black")
     ax.set_xticks(range(len(cm)), names, rotation=45, ha="right")
     ax.set_yticks(range(len(cm)), names)

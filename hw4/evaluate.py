@@ -557,7 +557,7 @@ GLUE_METRICS = ("auc", "coverage", "unobserved", "occupied_recall", "free_accura
                 "miou", "label_accuracy")
 
 
-def glue_rows(rows, glue, metrics=GLUE_METRICS, prefix: str = "", digits: int = 6) -> list:
+def glue_rows(rows, glue, metrics=GLUE_METRICS, prefix: str = "", digits: int = 5) -> list:
     """Glue every finite metric of every row under :func:`glue_key` names; return the names.
 
     ``glue`` is ``myst_nb.glue`` (passed in, so the package does not depend on myst-nb). Values are

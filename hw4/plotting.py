@@ -85,11 +85,14 @@ def semantic_rgb(ogm) -> np.ndarray:
 
 
 def class_legend(ax, num_classes=6, loc="upper left", **kw):
-    """Legend naming the six regions, free space and unknown."""
+    """Legend naming the six regions, free space and unknown (outside the axes, on the right,
+    unless ``loc``/``bbox_to_anchor`` say otherwise)."""
+    if loc == "upper left" and "bbox_to_anchor" not in kw:
+        kw["bbox_to_anchor"] = (1.02, 1.0)
     handles = [Patch(color=CLASS_COLORS[i], label=CLASS_NAMES[i]) for i in range(num_classes)]
     handles += [Patch(facecolor=FREE_COLOR, edgecolor="0.6", label="free"),
                 Patch(color=UNKNOWN_COLOR, label="unknown")]
-    return ax.legend(handles=handles, loc=loc, fontsize=7, framealpha=0.9, **kw)
+    return ax.legend(handles=handles, loc=loc, fontsize=8, framealpha=0.9, **kw)
 
 
 def plot_semantic(ogm, ax=None, title=None, legend=True):
@@ -128,7 +131,8 @@ def plot_dataset(data, ax=None, every=3, title=None):
         handles = []
     (line,) = ax.plot(data.poses[:, 0], data.poses[:, 1], "-", color="crimson", lw=0.8,
                       label="robot path")
-    ax.legend(handles=handles + [line], loc="upper left", fontsize=7, framealpha=0.9)
+    ax.legend(handles=handles + [line], loc="upper left", bbox_to_anchor=(1.02, 1.0), fontsize=8,
+              framealpha=0.9)
     ax.set_xlabel("x [m]")
     ax.set_ylabel("y [m]")
     ax.set_aspect("equal")

@@ -361,5 +361,7 @@ def mapping_video(view_groups, cam: Camera, titles, gif=None, mp4=None, strip=No
         n = len(frames)
         picks = strip_scans or sorted({max(1, round(n * q)) for q in (0.25, 0.5, 0.75, 1.0)})
         import imageio.v2 as imageio
-        imageio.imwrite(strip, np.vstack([frames[k - 1] for k in picks]))
+        gap = np.full((24,) + frames[0].shape[1:], 255, dtype=frames[0].dtype)  # white spacer
+        rows = [part for k in picks for part in (frames[k - 1], gap)][:-1]
+        imageio.imwrite(strip, np.vstack(rows))
     return frames
