@@ -169,7 +169,7 @@ def _pairs(grid, poses, nearest_poses, z_max, progress, reach=None):
         else:
             pose = np.tile(np.arange(n_poses), len(idx))
         cell = np.repeat(idx, per_cell)
-        if reach is not None:
+        if reach is not None and tree is None:  # all poses: most pairs are out of reach
             near = ((cells[cell, 0] - poses[pose, 0]) ** 2 + (cells[cell, 1] - poses[pose, 1]) ** 2
                     < reach[pose] ** 2)
             cell, pose = cell[near], pose[near]

@@ -12,7 +12,7 @@ import numpy as np
 TWO_PI = 2.0 * np.pi
 Z_MAX = 30.0           # maximum range of the laser [m]
 N_BEAMS = 133          # the template's beam count; w_beam = 2 pi / N_BEAMS [rad]
-BINS = 4096            # bearing bins of the nearest-beam lookup table
+BINS = 2048            # bearing bins of the nearest-beam lookup table
 
 
 def wrap_to_pi(a):
