@@ -87,8 +87,13 @@ def run_task(args) -> int:
     existing = [str(t) for t in targets if t.exists()]
     if existing and not args.force:
         raise InputError(f"{existing[0]} already exists: choose another --out or pass --force.")
+    if out.exists() and not out.is_dir():
+        raise InputError(f"--out {out} is a file, not a folder: choose another --out.")
     ogm = build_map(args.task, args.grid_size, **kw)
-    out.mkdir(parents=True, exist_ok=True)
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+    except OSError as e:
+        raise InputError(f"cannot create the output folder {out} ({e.strerror}).") from None
     arrays = dict(cells=ogm.grid.cells, x=ogm.grid.x, y=ogm.grid.y, grid_size=ogm.grid_size,
                   alpha=ogm.map["alpha"], mean=ogm.map["mean"], variance=ogm.map["variance"],
                   counts=ogm.counts, prior_alpha=ogm.prior_alpha)

@@ -8,7 +8,8 @@ set -eo pipefail
 cd "$(dirname "${BASH_SOURCE[0]}")/.."
 
 PYTHON=${PYTHON:-python3}
-if [ ! -x .venv/bin/python ]; then
+if [ ! -x .venv/bin/python ] || ! .venv/bin/python -m pip --version >/dev/null 2>&1; then
+    rm -rf .venv
     echo "setup: creating .venv with $($PYTHON --version 2>&1)"
     if ! "$PYTHON" -m venv .venv; then
         # Debian/Ubuntu ship venv (ensurepip) separately
@@ -18,6 +19,7 @@ if [ ! -x .venv/bin/python ]; then
             DEBIAN_FRONTEND=noninteractive apt-get install -y -q python3-venv
             "$PYTHON" -m venv .venv
         else
+            rm -rf .venv  # a half-made venv would make the next run skip this step
             echo "setup: '$PYTHON -m venv' failed; install it with: sudo apt-get install -y python3-venv" >&2
             exit 1
         fi

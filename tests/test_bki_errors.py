@@ -108,3 +108,54 @@ def test_cli_prints_one_sentence_and_exits_2(tmp_path, capsys):
     assert main(["--dataset", "toy", str(tmp_path / "nothing-here")]) == 2
     err = capsys.readouterr().err.strip()
     assert err.startswith("error: ") and "neither a PCD file nor a folder" in err and "\n" not in err
+
+
+# --- checks added after review: config values, unit quaternion, empty map, outputs ---------------
+
+@pytest.mark.parametrize("text,msg", [
+    ('[map]\nresolution = "a"\n', "resolution in .* must be a finite number"),
+    ("[map]\nvar_thresh = -1.0\n", "var_thresh in .* must be positive"),
+    ('scans = "x"\n', "scans in .* must be an integer"),
+    ("[map]\nnum_class = true\n", "num_class in .* must be an integer"),
+    ("[map]\nnum_class = 1\n", "num_class in .* must be at least 2"),
+])
+def test_config_values_are_checked(tmp_path, text, msg):
+    p = tmp_path / "c.toml"
+    p.write_text(text)
+    with pytest.raises(InputError, match=msg) as e:
+        load_config(p)
+    _one_sentence(e)
+
+
+def test_viewpoint_must_be_a_unit_quaternion(tmp_path):
+    d = _pcd(tmp_path / "d", [(1, 2, 0.5, 1), (1, 2, 0.6, 2)])
+    f = d / "scan_1.pcd"
+    f.write_text(f.read_text().replace("VIEWPOINT 0 0 0 1 0 0 0", "VIEWPOINT 0 0 0 2 0 0 0"))
+    with pytest.raises(InputError, match="not a unit quaternion") as e:
+        _map_toy(d)
+    _one_sentence(e)
+
+
+def test_all_points_beyond_max_range_is_an_error_not_an_empty_map(tmp_path, capsys):
+    d = _pcd(tmp_path / "d", [(100, 0, 0.5, 1), (100, 1, 0.5, 2)])
+    out = tmp_path / "out"
+    assert main([str(d), "--out", str(out), "--no-figures"]) == 2
+    assert "map would be empty" in capsys.readouterr().err
+    assert not out.exists()
+
+
+def test_bki_refuses_to_overwrite_and_out_must_be_a_folder(tmp_path, capsys):
+    d = _pcd(tmp_path / "d", [(1, 2, 0.5, 1), (1, 2, 0.6, 2), (2, 2, 0.5, 3)])
+    out = tmp_path / "out"
+    assert main([str(d), "--out", str(out), "--no-figures"]) == 0
+    before = (out / "voxels.csv").read_bytes()
+    capsys.readouterr()
+    assert main([str(d), "--out", str(out), "--no-figures"]) == 2
+    assert "already exists" in capsys.readouterr().err
+    assert (out / "voxels.csv").read_bytes() == before
+    assert main([str(d), "--out", str(out), "--no-figures", "--force"]) == 0
+    afile = tmp_path / "afile"
+    afile.write_text("mine")
+    assert main([str(d), "--out", str(afile), "--no-figures"]) == 2
+    assert "is a file, not a folder" in capsys.readouterr().err
+    assert afile.read_text() == "mine"

@@ -66,3 +66,11 @@ def test_run_py_as_in_the_handout(tmp_path):
 def test_data_command_verifies():
     r = cli("data", "--only", "intel/")
     assert r.returncode == 0 and "2 file(s) present and verified" in r.stdout
+
+
+def test_run_out_is_a_file(tmp_path):
+    afile = tmp_path / "afile"
+    afile.write_text("mine")
+    r = cli("run", "--task", "1", "--grid-size", "0.5", "--out", str(afile))
+    assert r.returncode == 2 and "is a file, not a folder" in r.stderr
+    assert afile.read_text() == "mine"

@@ -48,6 +48,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--video", action="store_true",
                    help="also write the map after each scan as mapping.gif and mapping.mp4")
     p.add_argument("--no-figures", action="store_true", help="write only voxels.csv and voxels.ply")
+    p.add_argument("--force", action="store_true", help="overwrite existing output files in DIR")
 
 
 def register(subparsers) -> argparse.ArgumentParser:
@@ -80,7 +81,14 @@ def run_bki(args) -> int:
     if n:
         loaders = loaders[:n]
     out = args.out or Path("out") / "bki" / f"{args.dataset}_{args.method}"
-    out.mkdir(parents=True, exist_ok=True)
+    if out.exists() and not out.is_dir():
+        raise InputError(f"--out {out} is a file, not a folder: choose another --out.")
+    ours = ["voxels.csv", "voxels.ply", "mapping.gif", "mapping.mp4"] + [
+        f"map3d_{c}{s}.png" for c in ("class", "variance") for s in ("", "_no_var_thresh")] + [
+        "topdown_class.png", "topdown_variance.png"]
+    existing = [out / f for f in ours if (out / f).exists()]
+    if existing and not getattr(args, "force", False):
+        raise InputError(f"{existing[0]} already exists: choose another --out or pass --force.")
 
     vmap = new_map(cfg, args.method)
     hits = free = 0
@@ -89,6 +97,13 @@ def run_bki(args) -> int:
         hits += step.training.n_hits
         free += step.training.n_free
     view = vmap.view()
+    if len(view) == 0:
+        raise InputError(f"the {len(loaders)} scan(s) gave no training points within max_range "
+                         f"{cfg.max_range} m (or no labelled hits): the map would be empty.")
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+    except OSError as e:
+        raise InputError(f"cannot create the output folder {out} ({e.strerror}).") from None
     write_csv(view, out / "voxels.csv")
     write_ply(view, out / "voxels.ply")
     written = ["voxels.csv", "voxels.ply"]

@@ -1,6 +1,7 @@
 """Per-dataset settings of the 3D semantic map, read from ``hw4/bki/configs/<dataset>.toml``."""
 from __future__ import annotations
 
+import math
 import tomllib
 from dataclasses import dataclass, fields, replace
 from pathlib import Path
@@ -63,8 +64,24 @@ def load_config(dataset_or_path: str | Path) -> BKIConfig:
     unknown = sorted(set(flat) - set(known))
     if unknown:
         raise InputError(f"the config {path} has unknown setting {unknown[0]!r}; known: {', '.join(known)}.")
+    for name, value in flat.items():
+        want = {"float": float, "int": int, "str": str}[known[name]]  # annotations are strings
+        if want is str:
+            ok = isinstance(value, str) and value != ""
+        elif want is int:
+            ok = isinstance(value, int) and not isinstance(value, bool)
+        else:
+            ok = isinstance(value, (int, float)) and not isinstance(value, bool) and math.isfinite(value)
+        if not ok:
+            kind = {int: "an integer", float: "a finite number", str: "a non-empty string"}[want]
+            raise InputError(f"{name} in {path} must be {kind}; got {value!r}.")
     cfg = BKIConfig(**flat)
-    for name in ("resolution", "free_resolution", "ell", "sf2", "prior"):
+    for name in ("resolution", "free_resolution", "ds_resolution", "ell", "sf2", "prior",
+                 "var_thresh"):
         if not getattr(cfg, name) > 0:
             raise InputError(f"{name} in {path} must be positive; got {getattr(cfg, name)}.")
+    if cfg.num_class < 2:
+        raise InputError(f"num_class in {path} must be at least 2 (free and one class); got {cfg.num_class}.")
+    if cfg.scans < 0:
+        raise InputError(f"scans in {path} must be 0 (all) or a positive number; got {cfg.scans}.")
     return cfg

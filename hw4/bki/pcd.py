@@ -126,6 +126,9 @@ def read_pcd(path) -> PCD:
     if viewpoint.shape != (7,) or not np.all(np.isfinite(viewpoint)):
         raise InputError(f"{name}: PCD VIEWPOINT must be 7 finite numbers tx ty tz qw qx qy qz; "
                          f"got {' '.join(vp)!r}.")
+    if abs(np.linalg.norm(viewpoint[3:]) - 1.0) > 1e-3:
+        raise InputError(f"{name}: PCD VIEWPOINT orientation qw qx qy qz = {' '.join(vp[3:])} is not a "
+                         "unit quaternion, so the sensor pose is not a rigid transform.")
     kind = " ".join(header["DATA"]).lower()
     ncol = sum(c for _, _, c in dtypes)
     if kind == "ascii":

@@ -55,10 +55,11 @@ def leaf_keys(points: np.ndarray, size: float) -> np.ndarray:
     size : float [m]
         Leaf (voxel) edge length.
     """
-    idx = np.floor(points / size).astype(np.int64) + _OFF
-    if idx.size and (idx.min() < 0 or idx.max() >= 2 * _OFF):
-        raise InputError(f"a point lies farther than {float(_OFF) * size:.0f} m from the world origin "
+    cells = np.floor(points / size)
+    if cells.size and (cells.min() < -_OFF or cells.max() >= _OFF):  # checked before the int cast
+        raise InputError(f"a point lies farther than {float(_OFF) * size:g} m from the world origin "
                          f"for a grid of {size} m; check the units and poses of the scan.")
+    idx = cells.astype(np.int64) + _OFF
     return (idx[:, 0] << 42) | (idx[:, 1] << 21) | idx[:, 2]
 
 
