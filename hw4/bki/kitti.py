@@ -132,29 +132,28 @@ def velodyne_poses(P: np.ndarray, Tr: np.ndarray) -> np.ndarray:
     return np.linalg.inv(Tr)[None] @ P @ Tr[None]
 
 
-def read_bin(path) -> np.ndarray:
-    """Read a velodyne ``.bin``: (N, 4) float32 ``x, y, z`` [m] (velodyne frame) and remission."""
+def _read_records(path, record: int, what: str) -> bytes:
+    """The bytes of ``path``, checked to hold whole records of ``record`` bytes."""
     path = Path(path)
     try:
         raw = path.read_bytes()
     except OSError as e:
         raise InputError(f"cannot read {path} ({e.strerror}).") from None
-    if len(raw) % 16:
-        raise InputError(f"{path} has {len(raw)} bytes, not a multiple of 16 (4 float32 per point): "
-                         "the file is truncated or not a velodyne scan.")
+    if len(raw) % record:
+        raise InputError(f"{path} has {len(raw)} bytes, not a multiple of {record} ({what}): "
+                         "the file is truncated or of another kind.")
+    return raw
+
+
+def read_bin(path) -> np.ndarray:
+    """Read a velodyne ``.bin``: (N, 4) float32 ``x, y, z`` [m] (velodyne frame) and remission."""
+    raw = _read_records(path, 16, "4 float32 per point")
     return np.frombuffer(raw, dtype="<f4").reshape(-1, 4)
 
 
 def read_label(path) -> np.ndarray:
     """Read a ``.label`` file: (N,) uint32 raw labels."""
-    path = Path(path)
-    try:
-        raw = path.read_bytes()
-    except OSError as e:
-        raise InputError(f"cannot read {path} ({e.strerror}).") from None
-    if len(raw) % 4:
-        raise InputError(f"{path} has {len(raw)} bytes, not a multiple of 4 (one uint32 per point).")
-    return np.frombuffer(raw, dtype="<u4")
+    return np.frombuffer(_read_records(path, 4, "one uint32 per point"), dtype="<u4")
 
 
 class SemanticKITTISequence:
