@@ -97,9 +97,11 @@ def test_kitti_layout_errors(tmp_path):
     (seq / "labels" / "000000.label").write_bytes((seq / "labels" / "000000.label").read_bytes()[:-8])
     with pytest.raises(InputError, match="labels for the"):
         s.scan(0)
-    (seq / "calib.txt").write_text("P0: 1 0 0 0 0 1 0 0 0 0 1 0\n")
+    drive = tmp_path / "drive"  # not a KITTI sequence number: no published Tr to fall back on
+    write_sequence(drive, n_scans=1)
+    (drive / "calib.txt").write_text("P0: 1 0 0 0 0 1 0 0 0 0 1 0\n")
     with pytest.raises(InputError, match="no 'Tr:' line"):
-        SemanticKITTISequence(seq)
+        SemanticKITTISequence(drive)
     with pytest.raises(InputError, match="not a folder"):
         SemanticKITTISequence(tmp_path / "nowhere")
 

@@ -94,9 +94,10 @@ def test_reader_puts_points_in_the_world_frame(tmp_path):
 
 def test_real_sample_frame_reads(tmp_path):
     cfg = load_config("semantickitti")
-    loaders = scan_source("semantickitti", None, cfg)
-    s = loaders[0]()
     files = {p.name: p for p in ensure_all("semantickitti_sample/")}
+    loaders = scan_source("semantickitti", files["calib.txt"].parent, cfg)
+    assert loaders.note == ""  # its calib.txt has the Tr line
+    s = loaders[0]()
     xyz = read_bin(files["000000.bin"])[:, :3].astype(float)
     raw = read_label(files["000000.label"])
     assert len(xyz) == 50 and set(np.unique(raw & 0xFFFF)) == {0, 50, 52, 70, 71, 80}
@@ -156,3 +157,102 @@ def test_cli_toy_video_and_help(tmp_path, capsys):
     with pytest.raises(SystemExit):
         _run_cli(["bki", "--help"])
     assert "voxels.csv" in capsys.readouterr().out
+
+
+def test_default_semantickitti_is_sequence_04_with_the_published_tr():
+    cfg = load_config("semantickitti")
+    loaders = scan_source("semantickitti", None, cfg)
+    assert len(loaders) == 10
+    assert "published" in loaders.note and "sequence 04" in loaders.note
+    s0, s9 = loaders[0](), loaders[9]()
+    assert len(s0.points) > 100_000 and s0.labels.min() >= 1 and s0.labels.max() <= 19
+    # the car drives forward (+x of the velodyne frame of scan 0) about 11.8 m over the ten scans
+    assert 11.0 < s9.origin[0] < 12.6 and abs(s9.origin[1]) < 1.0 and abs(s9.origin[2]) < 1.0
+    np.testing.assert_allclose(s0.origin, 0, atol=1e-6)
+
+
+def _static_match(a, b):
+    """Median distance from the points of ``a`` to their nearest neighbour in ``b`` [m]."""
+    from scipy.spatial import cKDTree
+    return float(np.median(cKDTree(b).query(a[::50])[0]))
+
+
+def test_published_tr_registers_scans_0_and_9():
+    """With the published extrinsic, static structure of scans 0 and 9 coincides; with the
+    identity in place of Tr it does not (checks that the fallback is the right matrix)."""
+    from hw4.bki.kitti import PUBLISHED_TR, SemanticKITTISequence, read_poses, velodyne_poses
+    folder = ensure_all("semantickitti_04/sequences/04/poses.txt")[0].parent
+    seq = SemanticKITTISequence(folder)
+    Tr = np.eye(4)
+    Tr[:3] = np.reshape(PUBLISHED_TR[4], (3, 4))
+    np.testing.assert_array_equal(seq.Tr, Tr)
+    a, b = seq.scan(0), seq.scan(9)
+    static = lambda s: s.points[np.isin(s.labels, (13, 14, 15, 16, 18, 19))]  # building .. sign
+    good = _static_match(static(a), static(b))
+    assert good < 0.3
+    wrong = velodyne_poses(read_poses(folder / "poses.txt"), np.eye(4))
+    xyz = read_bin(seq.bins[9])[:, :3].astype(float)
+    cls = learning_labels(read_label(seq.label_dir / "000009.label"))
+    keep = np.isin(cls, (13, 14, 15, 16, 18, 19))
+    moved = xyz[keep] @ wrong[9][:3, :3].T + wrong[9][:3, 3]
+    assert _static_match(static(a), moved) > 5 * good
+
+
+def test_calib_tr_wins_and_calib_option_overrides(tmp_path):
+    from hw4.bki.kitti import SemanticKITTISequence
+    seq_dir = tmp_path / "sequences" / "04"
+    write_sequence(seq_dir, n_scans=2)
+    seq = SemanticKITTISequence(seq_dir)
+    assert seq.calib_note.startswith("Tr from")  # the file's own Tr, not the published value
+    own = seq.Tr.copy()
+    other = tmp_path / "other_calib.txt"
+    T = np.eye(4)[:3]
+    other.write_text("Tr: " + " ".join(f"{v:.12e}" for v in T.ravel()) + "\n")
+    seq2 = SemanticKITTISequence(seq_dir, calib=other)
+    np.testing.assert_array_equal(seq2.Tr, np.eye(4))
+    assert not np.array_equal(own, np.eye(4))
+
+
+def test_missing_tr_fallback_and_refusal(tmp_path):
+    from hw4.bki.kitti import PUBLISHED_TR, SemanticKITTISequence
+    for name, ok in (("04", True), ("00", True), ("03", True), ("10", True), ("11", False),
+                     ("²", False), ("my_drive", False)):
+        seq_dir = tmp_path / name / "sequences" / name
+        write_sequence(seq_dir, n_scans=1)
+        calib = seq_dir / "calib.txt"
+        calib.write_text("P0: " + " ".join(["0"] * 12) + "\n")
+        if ok:
+            seq = SemanticKITTISequence(seq_dir)
+            np.testing.assert_array_equal(seq.Tr[:3].ravel(), PUBLISHED_TR[int(name)])
+            assert f"sequence {int(name):02d}" in seq.calib_note
+        else:
+            with pytest.raises(InputError, match="no 'Tr:' line.*--calib FILE"):
+                SemanticKITTISequence(seq_dir)
+
+
+def test_calib_refusals(tmp_path):
+    from hw4.bki.kitti import read_calib
+    row = " ".join(f"{v:.6e}" for v in np.eye(4)[:3].ravel())
+    p = tmp_path / "calib.txt"
+    p.write_text(f"Tr: {row}\nTr: {row}\n")
+    np.testing.assert_array_equal(read_calib(p), np.eye(4))  # the same line twice is harmless
+    shifted = " ".join(f"{v:.6e}" for v in (np.eye(4)[:3] + [[0, 0, 0, 1], [0] * 4, [0] * 4]).ravel())
+    p.write_text(f"Tr: {row}\nTr: {shifted}\n")
+    with pytest.raises(InputError, match="2 different 'Tr:' lines"):
+        read_calib(p)
+    p.write_text(f"Tr {row}\n")
+    with pytest.raises(InputError, match="no colon"):
+        read_calib(p)
+    p.write_bytes(b"Tr: \xff\xfe\n")
+    with pytest.raises(InputError, match="not a UTF-8"):
+        read_calib(p)
+
+
+def test_cli_says_how_many_scans_exist(tmp_path, capsys):
+    seq_dir = tmp_path / "sequences" / "04"
+    write_sequence(seq_dir, n_scans=2)
+    rc = _run_cli(["bki", "--dataset", "semantickitti", str(seq_dir), "--out", str(tmp_path / "o"),
+                   "--scans", "50", "--no-figures"])
+    assert rc == 0
+    err = capsys.readouterr().err
+    assert "50 scans asked for, 2 exist: mapping all 2" in err

@@ -25,10 +25,13 @@ EPILOG = """\
 examples:
   python -m hw4 bki --dataset toy                       # the 12 toy scans, S-BKI
   python -m hw4 bki --dataset toy --method scsm --out out/toy_csm
+  python -m hw4 bki --dataset semantickitti            # the 10 verified scans of sequence 04
   python -m hw4 bki --dataset semantickitti /data/kitti/dataset/sequences/04 --scans 100
 PATH is a folder of PCD scans (toy) or a SemanticKITTI sequence folder with velodyne/, labels/
 (or --config with labels = "predictions"), poses.txt and calib.txt. Without PATH the verified toy
-scans (or the one-frame SemanticKITTI sample) from data/ are used."""
+scans (or the 10 scans of SemanticKITTI sequence 04) from data/ are used. A calib.txt without a
+Tr line falls back on KITTI's published extrinsic for sequences 00-10; --calib FILE supplies
+another (a file with a 'Tr: <12 numbers>' line)."""
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
@@ -45,6 +48,9 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                    help="output folder (default: out/bki/<dataset>_<method>)")
     p.add_argument("--config", type=Path, default=None, metavar="TOML",
                    help="settings file instead of hw4/bki/configs/<dataset>.toml")
+    p.add_argument("--calib", type=Path, default=None, metavar="FILE",
+                   help="SemanticKITTI: use the 'Tr:' line of FILE (velodyne -> camera 0) instead "
+                        "of the sequence's calib.txt")
     p.add_argument("--video", action="store_true",
                    help="also write the map after each scan as mapping.gif and mapping.mp4")
     p.add_argument("--no-figures", action="store_true", help="write only voxels.csv and voxels.ply")
@@ -77,7 +83,12 @@ def run_bki(args) -> int:
     n = cfg.scans if args.scans is None else args.scans
     if n < 0:
         raise InputError(f"--scans must be 0 (all) or a positive number; got {n}.")
-    loaders = scan_source(args.dataset, args.path, cfg)
+    loaders = scan_source(args.dataset, args.path, cfg, calib=getattr(args, "calib", None))
+    if loaders.note:
+        print(f"note: {loaders.note}.", file=sys.stderr)
+    if args.scans is not None and n > len(loaders):
+        print(f"note: {n} scans asked for, {len(loaders)} exist: mapping all {len(loaders)}.",
+              file=sys.stderr)
     if n:
         loaders = loaders[:n]
     out = args.out or Path("out") / "bki" / f"{args.dataset}_{args.method}"

@@ -9,6 +9,12 @@ Layout of ``sequences/NN/`` (http://www.semantic-kitti.org/dataset.html):
   ``t`` in the frame of the camera of scan 0;
 * ``calib.txt`` -- the line ``Tr:`` (3x4 row-major): velodyne -> left camera.
 
+A ``calib.txt`` without ``Tr`` (some public copies carry only ``P0``-``P3``) falls back on KITTI
+odometry's published extrinsic of the sequence's recording day (:data:`PUBLISHED_TR`: sequences
+00-02, 03 and 04-10, the values the reference C++ package hard-codes); a ``Tr`` in ``calib.txt``
+always wins, and ``calib=`` (``python -m hw4 bki --calib FILE``) names another file whose ``Tr``
+line is used instead. Any other sequence without ``Tr`` is refused with what to supply.
+
 As in SemanticKITTI's own tools, the velodyne pose of scan ``t`` in the world frame (the velodyne
 frame of scan 0, z up) is ``inv(Tr) @ P_t @ Tr``; the sensor origin is its translation. Raw ids are
 mapped to the 19 training classes plus class 0 (unlabeled) with the dataset's ``learning_map``, and
@@ -62,6 +68,20 @@ def learning_labels(raw: np.ndarray, name: str = "labels") -> np.ndarray:
     return cls
 
 
+_TR_2011_10_03 = (4.276802385584e-04, -9.999672484946e-01, -8.084491683471e-03, -1.198459927713e-02,
+                  -7.210626507497e-03, 8.081198471645e-03, -9.999413164504e-01, -5.403984729748e-02,
+                  9.999738645903e-01, 4.859485810390e-04, -7.206933692422e-03, -2.921968648686e-01)
+_TR_2011_09_26 = (2.34773698147e-04, -9.99944154543764e-01, -1.0563477811052e-02, -2.796816941295e-03,
+                  1.0449407416593e-02, 1.0565353641379e-02, -9.99889574117649e-01, -7.5108791382965e-02,
+                  9.99945388562002e-01, 1.24365378387e-04, 1.0451302995669e-02, -2.72132796405873e-01)
+_TR_2011_09_30 = (-1.857739385241e-03, -9.999659513510e-01, -8.039975204516e-03, -4.784029760483e-03,
+                  -6.481465826011e-03, 8.051860151134e-03, -9.999466081774e-01, -7.337429464231e-02,
+                  9.999773098287e-01, -1.805528627661e-03, -6.496203536139e-03, -3.339968064433e-01)
+PUBLISHED_TR = {0: _TR_2011_10_03, 1: _TR_2011_10_03, 2: _TR_2011_10_03, 3: _TR_2011_09_26,
+                **{n: _TR_2011_09_30 for n in range(4, 11)}}
+"""KITTI odometry's published velodyne -> camera-0 extrinsic (3x4 row-major) per sequence 0..10."""
+
+
 def _matrix_rows(text: str, name: str) -> np.ndarray:
     try:
         vals = [[float(v) for v in ln.split()] for ln in text.splitlines() if ln.strip()]
@@ -89,29 +109,74 @@ def check_rigid(T: np.ndarray, name: str, tol: float = 1e-4) -> None:
                          f"|R^T R - I| = {err:.2g}, det = {np.linalg.det(R):.3g}).")
 
 
-def read_calib(path) -> np.ndarray:
-    """Read ``Tr`` (velodyne -> left camera) from ``calib.txt`` as a (4, 4) array."""
-    path = Path(path)
+def _decode(path: Path, data: bytes) -> str:
     try:
-        lines = path.read_text().splitlines()
+        return data.decode("utf-8")
+    except UnicodeDecodeError:
+        raise InputError(f"{path} is not a UTF-8 text file.") from None
+
+
+def _read_text(path: Path) -> str:
+    try:
+        data = path.read_bytes()
     except OSError as e:
         raise InputError(f"cannot read {path} ({e.strerror}).") from None
-    rows = [ln.split(":", 1)[1] for ln in lines if ln.split(":", 1)[0].strip() == "Tr"]
+    return _decode(path, data)
+
+
+def read_calib(path, required: bool = True) -> np.ndarray | None:
+    """Read ``Tr`` (velodyne -> left camera) from ``calib.txt`` as a (4, 4) array.
+
+    With ``required=False`` a file without a ``Tr:`` line gives ``None``. Two different ``Tr``
+    lines, or a ``Tr`` line without its colon, are refused.
+    """
+    path = Path(path)
+    rows = []
+    for n, ln in enumerate(_read_text(path).splitlines(), 1):
+        key, colon, rest = ln.partition(":")
+        if key.strip() == "Tr":
+            rows.append(rest)
+        elif not colon and ln.split()[:1] == ["Tr"]:
+            raise InputError(f"line {n} of {path} starts with Tr but has no colon ('Tr: 12 numbers').")
     if not rows:
-        raise InputError(f"{path} has no 'Tr:' line (velodyne -> camera calibration).")
-    Tr = _matrix_rows(rows[0], f"{path} (Tr)")[0]
-    check_rigid(Tr, f"the Tr calibration in {path}")
-    return Tr
+        if required:
+            raise InputError(f"{path} has no 'Tr:' line (velodyne -> camera calibration).")
+        return None
+    mats = [_matrix_rows(r, f"{path} (Tr)")[0] for r in rows]
+    if any(not np.array_equal(m, mats[0]) for m in mats[1:]):
+        raise InputError(f"{path} has {len(mats)} different 'Tr:' lines; keep the one that is right.")
+    check_rigid(mats[0], f"the Tr calibration in {path}")
+    return mats[0]
+
+
+def sequence_calib(folder, calib=None) -> tuple[np.ndarray, str]:
+    """The velodyne -> camera extrinsic of a sequence folder and a sentence saying where it came from.
+
+    Order: the ``Tr`` line of ``calib`` (a file) when given; else the ``Tr`` of the folder's
+    ``calib.txt``; else KITTI's published value for the sequence named by the folder (00..10).
+    """
+    folder = Path(folder)
+    if calib is not None:
+        return read_calib(calib), f"Tr from {calib}"
+    Tr = read_calib(folder / "calib.txt", required=False)
+    if Tr is not None:
+        return Tr, f"Tr from {folder / 'calib.txt'}"
+    name = folder.resolve().name
+    seq = int(name) if name.isascii() and name.isdigit() else None
+    if seq not in PUBLISHED_TR:
+        raise InputError(f"{folder / 'calib.txt'} has no 'Tr:' line and sequence {name!r} has no "
+                         "published KITTI extrinsic (known: 00-10): add the 'Tr: <12 numbers>' line "
+                         "(velodyne -> camera 0, 3x4 row-major) or pass --calib FILE.")
+    Tr = np.eye(4)
+    Tr[:3, :] = np.reshape(PUBLISHED_TR[seq], (3, 4))
+    return Tr, (f"{folder / 'calib.txt'} has no Tr: using KITTI's published velodyne-to-camera "
+                f"extrinsic of sequence {seq:02d}")
 
 
 def read_poses(path) -> np.ndarray:
     """Read ``poses.txt``: (T, 4, 4) camera poses, camera frame of scan 0. Each must be rigid."""
     path = Path(path)
-    try:
-        text = path.read_text()
-    except OSError as e:
-        raise InputError(f"cannot read {path} ({e.strerror}).") from None
-    P = _matrix_rows(text, str(path))
+    P = _matrix_rows(_read_text(path), str(path))
     for t, T in enumerate(P):
         check_rigid(T, f"pose {t} (line {t + 1}) of {path}")
     return P
@@ -167,23 +232,30 @@ class SemanticKITTISequence:
     labels : str
         Name of the label folder (``labels`` for ground truth, ``predictions`` for network output;
         either way raw SemanticKITTI ids).
+    calib : str or Path, optional
+        A file whose ``Tr:`` line replaces the folder's calibration (see :func:`sequence_calib`).
+
+    Attributes
+    ----------
+    calib_note : str
+        Where the extrinsic came from (one sentence, for the command to print).
     """
 
-    def __init__(self, folder, labels: str = "labels"):
+    def __init__(self, folder, labels: str = "labels", calib=None):
         self.folder = Path(folder)
         if not self.folder.is_dir():
             raise InputError(f"{self.folder} is not a folder; give a SemanticKITTI sequence folder "
                              "such as dataset/sequences/04.")
         vel = self.folder / "velodyne"
-        self.bins = sorted(vel.glob("*.bin")) if vel.is_dir() else []
+        self.bins = sorted(p for p in vel.glob("*.bin") if p.is_file()) if vel.is_dir() else []
         if not self.bins:
             raise InputError(f"{vel} holds no .bin scans; is {self.folder} a SemanticKITTI sequence folder?")
         self.label_dir = self.folder / labels
         if not self.label_dir.is_dir():
             raise InputError(f"{self.label_dir} is missing: the scans need per-point labels "
                              "(labels/ or predictions/).")
-        self.poses = velodyne_poses(read_poses(self.folder / "poses.txt"),
-                                    read_calib(self.folder / "calib.txt"))
+        self.Tr, self.calib_note = sequence_calib(self.folder, calib)
+        self.poses = velodyne_poses(read_poses(self.folder / "poses.txt"), self.Tr)
         if len(self.poses) < len(self.bins):
             raise InputError(f"{self.folder / 'poses.txt'} has {len(self.poses)} poses for "
                              f"{len(self.bins)} scans; each scan needs a pose.")
@@ -207,7 +279,7 @@ class SemanticKITTISequence:
             raise InputError(f"{lab_path.name} has {len(raw)} labels for the {len(pts)} points of "
                              f"{b.name}; they must match one to one.")
         cls = learning_labels(raw, str(lab_path))
-        i = int(b.stem) if b.stem.isdigit() else t  # scan NNNNNN has the pose on line NNNNNN
+        i = int(b.stem) if (b.stem.isascii() and b.stem.isdigit()) else t  # scan NNNNNN has the pose on line NNNNNN
         if i >= len(self.poses):
             raise InputError(f"{b.name} has no pose: {self.folder / 'poses.txt'} has {len(self.poses)} lines.")
         T = self.poses[i]

@@ -43,7 +43,25 @@ def toy_paths(folder=None) -> list[Path]:
     return paths
 
 
-def scan_source(dataset: str, path=None, cfg: BKIConfig | None = None) -> list[Callable[[], Scan]]:
+class Loaders(list):
+    """A list of scan loaders; ``note`` says where the calibration came from ('' when not needed)."""
+
+    note: str = ""
+
+
+KITTI_04 = "semantickitti_04/sequences/04/"
+"""The verified copy of SemanticKITTI sequence 04 (scans 0-9) in :mod:`hw4.data`."""
+
+
+def kitti_04_folder() -> Path:
+    """The sequence 04 folder in ``data/``, made present and verified first."""
+    from ..data import DATA_DIR, ensure_all
+    ensure_all(KITTI_04)
+    return DATA_DIR / KITTI_04
+
+
+def scan_source(dataset: str, path=None, cfg: BKIConfig | None = None,
+                calib=None) -> Loaders:
     """Loaders of the scans of a dataset, in mapping order.
 
     Parameters
@@ -51,18 +69,24 @@ def scan_source(dataset: str, path=None, cfg: BKIConfig | None = None) -> list[C
     dataset : {"toy", "semantickitti"}
     path : str or Path, optional
         Folder of PCD scans (toy) or a SemanticKITTI sequence folder; by default the verified toy
-        scans or the one-frame SemanticKITTI sample of :mod:`hw4.data`.
+        scans or the 10 verified scans of SemanticKITTI sequence 04 of :mod:`hw4.data`.
     cfg : BKIConfig, optional
         Supplies the SemanticKITTI label folder.
+    calib : str or Path, optional
+        SemanticKITTI only: a file whose ``Tr:`` line replaces the sequence's calibration.
     """
     if dataset == "toy":
-        return [lambda p=p: read_labelled_scan(p) for p in toy_paths(path)]
+        if calib is not None:
+            raise InputError("--calib applies to SemanticKITTI sequences only (toy scans carry "
+                             "their pose in VIEWPOINT).")
+        return Loaders(lambda p=p: read_labelled_scan(p) for p in toy_paths(path))
     if dataset == "semantickitti":
         if path is None:
-            from ..data import ensure_all
-            path = ensure_all("semantickitti_sample/")[0].parent
-        seq = SemanticKITTISequence(path, labels=(cfg.labels if cfg else "labels"))
-        return [lambda t=t: seq.scan(t) for t in range(len(seq))]
+            path = kitti_04_folder()
+        seq = SemanticKITTISequence(path, labels=(cfg.labels if cfg else "labels"), calib=calib)
+        out = Loaders(lambda t=t: seq.scan(t) for t in range(len(seq)))
+        out.note = seq.calib_note if "published" in seq.calib_note else ""
+        return out
     raise InputError(f"unknown dataset {dataset!r}; use toy or semantickitti.")
 
 
