@@ -46,6 +46,7 @@ def register(sub) -> None:
                    help="continuous models: nearest beam (Algorithm 2) or all beams within l")
     p.add_argument("--sample-step", type=float, default=None, metavar="S",
                    help="continuous models: free-sample spacing along a beam [m] (default 0.1)")
+    p.add_argument("--no-figures", action="store_true", help="write only the .npz map")
     p.add_argument("--force", action="store_true", help="overwrite existing output files")
     p.set_defaults(func=run_task)
 
@@ -72,6 +73,7 @@ def run_task(args) -> int:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
     from . import plotting
+    from .atomic import Outputs
     from .tasks import build_map, model_class, task_name
 
     kw = {"nearest_poses": args.nearest_poses, "progress": True}
@@ -81,36 +83,29 @@ def run_task(args) -> int:
             kw["sample_step"] = args.sample_step
     elif args.beams != "nearest" or args.sample_step is not None:
         raise InputError("--beams and --sample-step apply to the continuous tasks 2 and 4 only.")
+    model_class(args.task)(grid_size=args.grid_size, **kw)  # every option checked before any work
     stem = f"task{args.task}_grid{args.grid_size:g}"
-    out = args.out
-    targets = [out / f"{stem}.npz", out / f"{stem}_mean.png", out / f"{stem}_variance.png"]
-    existing = [str(t) for t in targets if t.exists()]
-    if existing and not args.force:
-        raise InputError(f"{existing[0]} already exists: choose another --out or pass --force.")
-    if out.exists() and not out.is_dir():
-        raise InputError(f"--out {out} is a file, not a folder: choose another --out.")
-    ogm = build_map(args.task, args.grid_size, **kw)
-    try:
-        out.mkdir(parents=True, exist_ok=True)
-    except OSError as e:
-        raise InputError(f"cannot create the output folder {out} ({e.strerror}).") from None
-    arrays = dict(cells=ogm.grid.cells, x=ogm.grid.x, y=ogm.grid.y, grid_size=ogm.grid_size,
-                  alpha=ogm.map["alpha"], mean=ogm.map["mean"], variance=ogm.map["variance"],
-                  counts=ogm.counts, prior_alpha=ogm.prior_alpha)
-    if not ogm.semantic:
-        arrays["beta"] = ogm.map["beta"]
-    np.savez_compressed(targets[0], **arrays)
-    name = task_name(args.task)
-    fig, ax = plt.subplots(figsize=(6.4, 5.4))
-    plotting.plot_map(ogm, ax=ax, title=f"{name} mean, grid {args.grid_size:g} m")
-    fig.savefig(targets[1])
-    plt.close(fig)
-    fig, ax = plt.subplots(figsize=(6.4, 5.4))
-    plotting.plot_variance(ogm, ax=ax, title=f"{name} variance, grid {args.grid_size:g} m")
-    fig.savefig(targets[2])
-    plt.close(fig)
+    names = [f"{stem}.npz"]
+    if not getattr(args, "no_figures", False):
+        names += [f"{stem}_mean.png", f"{stem}_variance.png"]
+    with Outputs(args.out, names, force=args.force) as out:
+        ogm = build_map(args.task, args.grid_size, **kw)
+        arrays = dict(cells=ogm.grid.cells, x=ogm.grid.x, y=ogm.grid.y, grid_size=ogm.grid_size,
+                      alpha=ogm.map["alpha"], mean=ogm.map["mean"], variance=ogm.map["variance"],
+                      counts=ogm.counts, prior_alpha=ogm.prior_alpha)
+        if not ogm.semantic:
+            arrays["beta"] = ogm.map["beta"]
+        np.savez_compressed(out[names[0]], **arrays)
+        name = task_name(args.task)
+        if len(names) > 1:
+            for target, draw, what in ((names[1], plotting.plot_map, "mean"),
+                                       (names[2], plotting.plot_variance, "variance")):
+                fig, ax = plt.subplots(figsize=(6.4, 5.4))
+                draw(ogm, ax=ax, title=f"{name} {what}, grid {args.grid_size:g} m")
+                fig.savefig(out[target], bbox_inches="tight")  # the class legend sits right of the map
+                plt.close(fig)
     print(f"{name}: {ogm.map['size']:,} cells, {ogm.observed.mean():.1%} observed, "
           f"built in {ogm.build_seconds:.2f} s")
-    for t in targets:
+    for t in out.written:
         print(f"wrote {t}")
     return 0

@@ -14,9 +14,11 @@ aside as ``<name>.partial`` and an :class:`~hw4.errors.InputError` says what to 
 """
 from __future__ import annotations
 
+import errno
 import hashlib
 import os
 import shutil
+import urllib.error
 import urllib.request
 import zipfile
 from dataclasses import dataclass
@@ -27,8 +29,19 @@ import numpy as np
 from .errors import InputError
 
 PROJECT_ROOT = Path(__file__).resolve().parent.parent
-DATA_DIR = Path(os.environ.get("HW4_DATA_DIR", PROJECT_ROOT / "data"))
-SHARED_DIR = Path(os.environ.get("HW4_SHARED_DATA", PROJECT_ROOT.parent / "shared" / "data"))
+DATA_DIR = Path(os.environ.get("HW4_DATA_DIR") or PROJECT_ROOT / "data")
+SHARED_DIR = Path(os.environ.get("HW4_SHARED_DATA") or PROJECT_ROOT.parent / "shared" / "data")
+
+
+_WRITE_ERRNOS = (errno.ENOSPC, errno.EDQUOT, errno.EFBIG, errno.EROFS, errno.EACCES, errno.EPERM)
+
+
+def _check_environment() -> None:
+    """Refuse ``HW4_DATA_DIR`` / ``HW4_SHARED_DATA`` set to an empty string (it would mean ``.``)."""
+    for var in ("HW4_DATA_DIR", "HW4_SHARED_DATA"):
+        if var in os.environ and not os.environ[var].strip():
+            raise InputError(f"{var} is set but empty: unset it (to use the default folder) or set "
+                             "it to a folder.")
 MANIFEST = PROJECT_ROOT / "data" / "manifest.tsv"
 
 INTEL = "intel/sample_Intel_dataset.mat"
@@ -68,6 +81,7 @@ def ensure(name: str, data_dir: Path | None = None, shared_dir: Path | None = No
     download : bool
         Allow the last resort, the download from the upstream URL.
     """
+    _check_environment()
     data_dir = Path(data_dir or DATA_DIR)
     shared_dir = Path(shared_dir or SHARED_DIR)
     rows = manifest()
@@ -75,29 +89,53 @@ def ensure(name: str, data_dir: Path | None = None, shared_dir: Path | None = No
         raise InputError(f"{name} is not a dataset file listed in data/manifest.tsv.")
     want, url = rows[name]
     target = data_dir / name
+    if target.is_dir():
+        raise InputError(f"{target} is a folder, not the dataset file: move it away and run "
+                         "`python -m hw4 data` again.")
     if target.exists():
         if sha256(target) != want:
             raise InputError(
                 f"{target} does not match its SHA-256 in data/manifest.tsv (corrupt or a different "
                 f"file): move it away and run `python -m hw4 data` to fetch a verified copy.")
         return target
-    target.parent.mkdir(parents=True, exist_ok=True)
+    for parent in reversed(target.relative_to(data_dir).parents):
+        folder = data_dir / parent
+        if folder.exists() and not folder.is_dir():
+            raise InputError(f"{folder} is a file, but {name} must go inside a folder of that name: "
+                             "move the file away.")
+    try:
+        target.parent.mkdir(parents=True, exist_ok=True)
+    except OSError as e:
+        raise InputError(f"cannot create the data folder {target.parent} ({e.strerror}): set "
+                         "HW4_DATA_DIR to a writable folder.") from None
     source = shared_dir / name
     partial = target.with_name(target.name + ".partial")
-    if source.exists():
-        shutil.copyfile(source, partial)
-        origin = str(source)
-    elif download and url != "-":
-        try:
-            with urllib.request.urlopen(url, timeout=60) as r, open(partial, "wb") as f:
-                shutil.copyfileobj(r, f)
-        except OSError as e:
-            raise InputError(f"{name} is missing from {data_dir} and {shared_dir}, and its download "
-                             f"from {url} failed ({e}): copy the file there by hand.") from None
-        origin = url
-    else:
-        raise InputError(f"{name} is missing from {data_dir} and {shared_dir} and has no upstream "
-                         f"URL to download from: copy the file into {data_dir / name}.")
+    try:
+        if source.is_file():
+            shutil.copyfile(source, partial)
+            origin = str(source)
+        elif download and url != "-":
+            try:
+                with urllib.request.urlopen(url, timeout=60) as r, open(partial, "wb") as f:
+                    shutil.copyfileobj(r, f)
+            except OSError as e:
+                if e.errno in _WRITE_ERRNOS:
+                    raise
+                partial.unlink(missing_ok=True)
+                raise InputError(f"{name} is missing from {data_dir} and {shared_dir}, and its "
+                                 f"download from {url} failed ({e}): copy the file there by "
+                                 "hand.") from None
+            origin = url
+        else:
+            raise InputError(f"{name} is missing from {data_dir} and {shared_dir} and has no "
+                             f"upstream URL to download from: copy the file into {data_dir / name}.")
+    except OSError as e:
+        partial.unlink(missing_ok=True)
+        raise InputError(f"cannot write {partial} ({e.strerror or e}): free some space or set "
+                         "HW4_DATA_DIR to a writable folder.") from None
+    except BaseException:
+        partial.unlink(missing_ok=True)
+        raise
     if sha256(partial) != want:
         raise InputError(f"{name} copied from {origin} does not match its SHA-256 in "
                          f"data/manifest.tsv (kept as {partial} for inspection): get a clean copy.")
@@ -106,8 +144,16 @@ def ensure(name: str, data_dir: Path | None = None, shared_dir: Path | None = No
 
 
 def ensure_all(prefix: str = "", **kw) -> list[Path]:
-    """Ensure every manifest file whose path starts with ``prefix``; return their paths."""
-    return [ensure(n, **kw) for n in manifest() if n.startswith(prefix)]
+    """Ensure every manifest file whose path starts with ``prefix``; return their paths.
+
+    A prefix that matches no file is refused (it would otherwise check nothing).
+    """
+    names = [n for n in manifest() if n.startswith(prefix)]
+    if not names:
+        folders = sorted({n.split("/")[0] + "/" for n in manifest()})
+        raise InputError(f"no dataset file in data/manifest.tsv starts with {prefix!r}; the "
+                         f"datasets are {', '.join(folders)} (paths are case-sensitive).")
+    return [ensure(n, **kw) for n in names]
 
 
 @dataclass
@@ -142,16 +188,31 @@ def _loadmat(path: Path) -> dict:
                          f"re-fetch it with `python -m hw4 data`.") from None
 
 
+def real_array(a, what: str) -> np.ndarray:
+    """``a`` as a float array; :class:`InputError` when it holds complex values or no numbers."""
+    try:
+        arr = np.asarray(a)
+    except (ValueError, TypeError):
+        raise InputError(f"{what} is not an array of numbers.") from None
+    if arr.dtype.kind == "c":
+        raise InputError(f"{what} holds complex numbers; it must be real (metres and radians).")
+    if arr.dtype.kind not in "biuf":
+        raise InputError(f"{what} must hold numbers; got an array of {arr.dtype}.")
+    return arr.astype(float)
+
+
 def poses_from_struct(pose) -> np.ndarray:
     """Convert the ``robotPose`` struct as ``scipy.io.loadmat`` returns it into a (T, 3) array.
 
-    Raises :class:`InputError` when the fields ``x``, ``y``, ``h`` are missing or disagree in length.
+    Raises :class:`InputError` when the fields ``x``, ``y``, ``h`` are missing, disagree in
+    length or are not real numbers.
     """
     try:
-        cols = [np.asarray(pose[k][0][0], dtype=float).reshape(-1) for k in ("x", "y", "h")]
+        raw = [np.asarray(pose[k][0][0]) for k in ("x", "y", "h")]
     except (KeyError, IndexError, ValueError, TypeError):
         raise InputError("robotPose must be the MATLAB struct with fields x, y, h "
                          "(as scipy.io.loadmat returns it).") from None
+    cols = [real_array(c, f"robotPose.{k}").reshape(-1) for c, k in zip(raw, "xyh")]
     if not (len(cols[0]) == len(cols[1]) == len(cols[2])):
         raise InputError("robotPose fields x, y, h have different lengths "
                          f"({len(cols[0])}, {len(cols[1])}, {len(cols[2])}).")
@@ -162,11 +223,17 @@ def scans_from_cell(scan) -> list:
     """Convert the ``laserScan`` cell array as ``scipy.io.loadmat`` returns it into a list of arrays."""
     try:
         arr = np.asarray(scan, dtype=object).reshape(-1)
-        out = [np.asarray(s, dtype=float) for s in arr]
-        out = [s[0] if (s.ndim == 3 or (s.dtype == object)) else s for s in out]
     except (ValueError, TypeError):
         raise InputError("laserScan must be the MATLAB cell array of 2xN (or 3xN) arrays "
                          "(as scipy.io.loadmat returns it).") from None
+    out = []
+    for t, s in enumerate(arr):
+        a = np.asarray(s) if not isinstance(s, np.ndarray) else s
+        while a.dtype == object and a.size == 1:  # a cell inside the cell
+            a = np.asarray(a.reshape(-1)[0])
+        if a.ndim == 3 and a.shape[0] == 1:
+            a = a[0]
+        out.append(real_array(a, f"laserScan scan {t}"))
     return out
 
 
@@ -180,7 +247,7 @@ def validate(poses: np.ndarray, scans: list, semantic: bool | None = None) -> No
     semantic : bool, optional
         When True every scan must have the label row; when False it is ignored.
     """
-    poses = np.asarray(poses)
+    poses = real_array(poses, "poses")
     if poses.ndim != 2 or poses.shape[1] != 3:
         raise InputError(f"poses must be a (T, 3) array of x, y, heading; got shape {poses.shape}.")
     if len(poses) == 0:
@@ -192,7 +259,7 @@ def validate(poses: np.ndarray, scans: list, semantic: bool | None = None) -> No
         raise InputError(f"there are {len(poses)} poses but {len(scans)} scans; "
                          "each pose needs exactly one scan.")
     for t, s in enumerate(scans):
-        s = np.asarray(s)
+        s = real_array(s, f"scan {t}")
         if s.ndim != 2 or s.shape[0] not in (2, 3):
             raise InputError(f"scan {t} must be a 2xN (or 3xN with labels) array; got shape {s.shape}.")
         if s.shape[1] == 0:

@@ -30,6 +30,47 @@ from .sensor import N_BEAMS, Z_MAX, BeamTable, in_field, relative
 
 PAIRS_PER_BLOCK = 1 << 21  # (cell, pose) pairs processed at once; bounds the working memory
 SAMPLE_STEP = 0.1          # default free-sample spacing along a beam [m] (= l / 2)
+MAX_SAMPLE_CHECKS = 2e9    # refuse runs needing more (pair, free sample) or (sample, cell) checks
+MAX_WORK_BYTES = 4 * 2**30  # refuse runs whose per-pose working arrays would exceed this
+BYTES_PER_CHECK = 64       # all-beams working memory per (sample, cell) candidate [bytes]
+
+
+def _refuse_heavy(grid, poses, table, model, beams, nearest_poses, l, step) -> None:
+    """Estimate the work (and for beams='all' the memory) up front; refuse with the numbers.
+
+    Nearest beam: every considered (cell, pose) pair tests at most ``min(2 l / step + 2, samples
+    on the longest beam + 1)`` free samples. All beams: every beam end point and free sample is
+    compared with the ``(2 ceil(l / g) + 3)^2`` cells around it, one pose at a time.
+    """
+    if model != "continuous":
+        return
+    n_poses = len(poses)
+    z = table.ranges
+    if beams == "nearest":
+        per_cell = n_poses if nearest_poses is None else min(nearest_poses, n_poses)
+        per_pair = min(np.ceil(2 * l / step) + 2, float(z.max()) / step + 2)
+        checks = float(grid.n_cells) * per_cell * per_pair
+        if checks > MAX_SAMPLE_CHECKS:
+            raise InputError(
+                f"sample_step {step:g} m with l {l:g} m means up to {per_pair:.3g} free samples per "
+                f"(cell, pose) pair, about {checks:.3g} checks for {grid.n_cells:,} cells x "
+                f"{per_cell} poses, more than the limit of {MAX_SAMPLE_CHECKS:.0e}: use a larger "
+                "sample_step, a smaller l, fewer nearest_poses or a larger grid_size.")
+        return
+    side = 2.0 * (np.ceil(l / grid.grid_size) + 1) + 1
+    samples = np.bincount(table.pose_of, weights=z / step + 2, minlength=n_poses)  # floats
+    worst = float(samples.max()) * side ** 2
+    total = float(samples.sum()) * side ** 2
+    need = worst * BYTES_PER_CHECK
+    if need > MAX_WORK_BYTES or total > MAX_SAMPLE_CHECKS * 10:
+        t = int(np.argmax(samples))
+        raise InputError(
+            f"beams='all' with sample_step {step:g} m and l {l:g} m places {samples[t]:.3g} end "
+            f"points and free samples on the beams of pose {t} (longest beam {z[table.pose_of == t].max():.3g} m), "
+            f"each checked against {side ** 2:.0f} cells: about {need / 2**30:.3g} GiB of working "
+            f"memory and {total:.3g} checks in all, more than the limits of "
+            f"{MAX_WORK_BYTES / 2**30:.0f} GiB and {MAX_SAMPLE_CHECKS * 10:.0e}: use a larger "
+            "sample_step or a smaller l, or drop the beams longer than z_max.")
 
 
 def _check(value, name, lo=0.0, allow_none=False):
@@ -107,6 +148,7 @@ def count_evidence(grid: Grid, poses, scans, *, model: str = "discrete", semanti
             raise InputError(f"semantic models need labels 1..{num_labels} in row 3 of every scan.")
     else:
         cls_hit = np.zeros(len(table.ranges), dtype=np.int64)
+    _refuse_heavy(grid, poses, table, model, beams, nearest_poses, l, sample_step)
     free = n_classes - 1
     acc = np.zeros(grid.n_cells * n_classes)
 

@@ -6,6 +6,7 @@ All coordinates are metres in the world frame.
 """
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -23,6 +24,49 @@ BYTES_PER_CELL = 160       # centres, KD-tree, variance, indices per cell [bytes
 def estimate_bytes(n_cells: int, n_classes: int = 2) -> int:
     """Rough peak memory [bytes] of a map with ``n_cells`` cells and ``n_classes`` evidence columns."""
     return int(n_cells) * (BYTES_PER_CELL + BYTES_PER_CELL_CLASS * n_classes)
+
+
+def _number(v) -> bool:
+    return not isinstance(v, bool) and isinstance(v, (int, float, np.integer, np.floating))
+
+
+def check_range(r, name: str) -> tuple:
+    """``r`` as a (lo, hi) pair of finite floats [m] with lo < hi, else :class:`InputError`."""
+    if isinstance(r, (str, bytes)) or not hasattr(r, "__len__") or len(r) != 2 \
+            or not all(_number(v) for v in r):
+        raise InputError(f"{name} must be a pair [lo, hi] of numbers in metres; got {r!r}.")
+    lo, hi = float(r[0]), float(r[1])
+    if not (np.isfinite(lo) and np.isfinite(hi) and hi > lo):
+        raise InputError(f"{name} must be finite with lo < hi; got [{r[0]}, {r[1]}].")
+    if max(abs(lo), abs(hi)) > 1e9:
+        raise InputError(f"{name} [{r[0]}, {r[1]}] reaches beyond 1e9 m: check the units.")
+    return lo, hi
+
+
+def check_grid(grid_size, range_x=RANGE_X, range_y=RANGE_Y, n_classes: int = 2) -> tuple:
+    """Check a grid's parameters and its memory estimate without building it; return (nx, ny).
+
+    Raises :class:`InputError` with one sentence (the estimate in GiB when it is too large).
+    """
+    g = grid_size
+    if not _number(g):
+        raise InputError(f"grid_size must be a number of metres; got {g!r}.")
+    if not np.isfinite(g) or g <= 0:
+        raise InputError(f"grid_size must be a positive number of metres; got {g}.")
+    (x0, x1), (y0, y1) = check_range(range_x, "range_x"), check_range(range_y, "range_y")
+    g = float(g)
+    cells = math.ceil((x1 + g - x0) / g) if (x1 + g - x0) / g < 1e300 else math.inf
+    cells *= math.ceil((y1 + g - y0) / g) if (y1 + g - y0) / g < 1e300 else math.inf
+    need = float(cells) * (BYTES_PER_CELL + BYTES_PER_CELL_CLASS * float(n_classes))
+    if need > MAX_MAP_BYTES:
+        many = f"{float(cells):.3g}" if math.isfinite(need) else "more than 1e300"
+        gib = (f"about {need / 2**30:.1f}" if need < 1e20 else f"about {need / 2**30:.3g}"
+               if math.isfinite(need) else "more than 1e290")
+        raise InputError(
+            f"grid_size {g:g} m gives {many} cells needing {gib} GiB, "
+            f"more than the {MAX_MAP_BYTES / 2**30:.0f} GiB limit: use a larger grid_size.")
+    fx, fy = math.ceil((x1 + g - x0) / g), math.ceil((y1 + g - y0) / g)
+    return fx, fy
 
 
 @dataclass
@@ -46,24 +90,14 @@ class Grid:
     y: np.ndarray = field(init=False, repr=False)
 
     def __post_init__(self):
-        g = self.grid_size
-        if isinstance(g, bool) or not isinstance(g, (int, float, np.integer, np.floating)):
-            raise InputError(f"grid_size must be a number of metres; got {g!r}.")
-        if not np.isfinite(g) or g <= 0:
-            raise InputError(f"grid_size must be a positive number of metres; got {g}.")
-        (x0, x1), (y0, y1) = self.range_x, self.range_y
-        if not (np.all(np.isfinite([x0, x1, y0, y1])) and x1 > x0 and y1 > y0):
-            raise InputError(f"map ranges must be finite with lo < hi; got x {self.range_x}, "
-                             f"y {self.range_y}.")
-        nx = int(np.ceil((x1 + g - x0) / g))
-        ny = int(np.ceil((y1 + g - y0) / g))
-        need = estimate_bytes(nx * ny, self.n_classes)
-        if need > MAX_MAP_BYTES:
-            raise InputError(
-                f"grid_size {g} m gives {nx * ny:,} cells needing about {need / 2**30:.1f} GiB, "
-                f"more than the {MAX_MAP_BYTES / 2**30:.0f} GiB limit: use a larger grid_size.")
-        self.x = np.arange(x0, x1 + g, g)
-        self.y = np.arange(y0, y1 + g, g)
+        nx, ny = check_grid(self.grid_size, self.range_x, self.range_y, self.n_classes)
+        g, x0, y0 = self.grid_size, self.range_x[0], self.range_y[0]
+        self.x = np.arange(x0, self.range_x[1] + g, g)
+        self.y = np.arange(y0, self.range_y[1] + g, g)
+        if (len(self.x), len(self.y)) != (nx, ny):  # never seen; guards the estimate above
+            raise InputError(f"grid_size {g} m gives {len(self.x)} x {len(self.y)} cells, not the "
+                             f"{nx} x {ny} estimated: choose a grid_size that divides the ranges "
+                             "less awkwardly.")
 
     @property
     def shape(self) -> tuple:

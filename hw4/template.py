@@ -20,12 +20,24 @@ from scipy.spatial import KDTree
 from . import data as _data
 from .errors import InputError
 from .evidence import SAMPLE_STEP, count_evidence
-from .grid import RANGE_X, RANGE_Y, GRID_SIZE, Grid
+from .grid import RANGE_X, RANGE_Y, GRID_SIZE, Grid, check_grid, check_range
 from .kernel import LENGTH, SIGMA0
 from .posterior import beta_mean_variance, dirichlet_mean_variance
 from .sensor import N_BEAMS, Z_MAX
 
 PRIOR = 1e-3  # alpha_0 = beta_0 (per class for the Dirichlet): small and uninformative
+MIN_PRIOR = 1e-100  # smaller priors underflow in the variance alpha beta / (s^2 (s + 1))
+MAX_SCALE = 1e50    # larger priors or kernel scales overflow s^2 (s + 1) [evidence]
+
+
+def _positive(v, name: str, unit: str, hi: float = np.inf) -> float:
+    """``v`` when it is a finite number in (0, hi], else :class:`InputError`."""
+    if isinstance(v, bool) or not isinstance(v, (int, float, np.integer, np.floating)) \
+            or not (np.isfinite(v) and 0 < v <= hi):
+        bound = f" and at most {hi:g}" if np.isfinite(hi) else ""
+        raise InputError(f"{name} must be a finite positive number{' of ' + unit if unit else ''}"
+                         f"{bound}; got {v!r}.")
+    return v
 
 
 class CountingSensorMap:
@@ -49,29 +61,50 @@ class CountingSensorMap:
 
     def __init__(self, grid_size=GRID_SIZE, range_x=RANGE_X, range_y=RANGE_Y, z_max=Z_MAX,
                  n_beams=N_BEAMS, nearest_poses=16, prior_alpha=PRIOR, progress=False, **kw):
+        check_range(range_x, "range_x")
+        check_range(range_y, "range_y")
         self.range_x = list(range_x)
         self.range_y = list(range_y)
-        self.z_max = z_max
+        self.z_max = _positive(z_max, "z_max", "m")
+        if isinstance(n_beams, bool) or not isinstance(n_beams, (int, np.integer)) or n_beams < 1:
+            raise InputError(f"n_beams must be a positive integer; got {n_beams!r}.")
         self.n_beams = n_beams
         self.grid_size = grid_size
         self.w_obstacle = 2 * grid_size if isinstance(grid_size, (int, float)) else None
         self.w_beam = 2 * np.pi / n_beams
+        if nearest_poses is not None and (isinstance(nearest_poses, bool) or not isinstance(
+                nearest_poses, (int, np.integer)) or nearest_poses < 1):
+            raise InputError(f"nearest_poses must be a positive integer or None (all poses); got "
+                             f"{nearest_poses!r}.")
         self.nn = nearest_poses
         self.nearest_poses = nearest_poses
         self.prior = prior_alpha
         self.prior_alpha = prior_alpha
-        self.progress = progress
+        if not isinstance(progress, (bool, np.bool_)):
+            raise InputError(f"progress must be True or False; got {progress!r}.")
+        self.progress = bool(progress)
         if self.continuous:
-            self.sigma = kw.pop("sigma", SIGMA0)
-            self.l = kw.pop("l", LENGTH)
-            self.sample_step = kw.pop("sample_step", SAMPLE_STEP)
+            self.sigma = _positive(kw.pop("sigma", SIGMA0), "sigma", "", hi=MAX_SCALE)
+            self.l = _positive(kw.pop("l", LENGTH), "l", "m")
+            self.sample_step = _positive(kw.pop("sample_step", SAMPLE_STEP), "sample_step", "m")
             self.beams = kw.pop("beams", "nearest")
+            if not isinstance(self.beams, str) or self.beams not in ("nearest", "all"):
+                raise InputError(f"beams must be 'nearest' or 'all'; got {self.beams!r}.")
         if self.semantic:
             self.num_classes = kw.pop("num_classes", _data.N_LABELS)
+            if isinstance(self.num_classes, bool) or not isinstance(
+                    self.num_classes, (int, np.integer)) or self.num_classes < 1:
+                raise InputError(f"num_classes must be a positive integer; got {self.num_classes!r}.")
         if kw:
             raise InputError(f"{type(self).__name__} got unknown parameter(s): {', '.join(kw)}.")
-        if isinstance(prior_alpha, bool) or not np.isscalar(prior_alpha) or not prior_alpha > 0:
+        if isinstance(prior_alpha, bool) or not np.isscalar(prior_alpha) or not isinstance(
+                prior_alpha, (int, float, np.integer, np.floating)) or not prior_alpha > 0:
             raise InputError(f"prior_alpha must be a positive number; got {prior_alpha!r}.")
+        if not MIN_PRIOR <= prior_alpha <= MAX_SCALE:
+            raise InputError(f"prior_alpha must lie between {MIN_PRIOR:g} and {MAX_SCALE:g} (beyond, "
+                             f"the posterior mean and variance overflow or underflow); got "
+                             f"{prior_alpha!r}.")
+        check_grid(grid_size, range_x, range_y, self.n_columns)
         self.map = {}
         self.pose = {}
         self.scan = []
@@ -93,7 +126,7 @@ class CountingSensorMap:
         scan : ``laserScan`` cell as ``loadmat`` returns it (each 2xN, or 3xN with labels, robot
             frame [m]), or a list of such arrays.
         """
-        poses = np.asarray(pose, dtype=float) if isinstance(pose, np.ndarray) and pose.dtype != object \
+        poses = _data.real_array(pose, "pose") if isinstance(pose, np.ndarray) and pose.dtype != object \
             and pose.dtype.names is None else _data.poses_from_struct(pose)
         scans = list(scan) if isinstance(scan, list) else _data.scans_from_cell(scan)
         _data.validate(poses, scans, semantic=self.semantic)
@@ -124,11 +157,18 @@ class CountingSensorMap:
             opts.update(beams=self.beams, sigma0=self.sigma, l=self.l, sample_step=self.sample_step)
         return opts
 
-    def build_ogm(self):
-        """Accumulate the evidence of every scan and compute mean and variance of every cell."""
+    def build_ogm(self, disable_print=None):
+        """Accumulate the evidence of every scan and compute mean and variance of every cell.
+
+        ``disable_print`` (the course's 2024 template): True hides the progress bar, False shows
+        it; by default the ``progress`` parameter decides.
+        """
         if self.grid is None:
             raise InputError("call construct_map(pose, scan) before build_ogm().")
-        counts = count_evidence(self.grid, self.poses, self.scans, **self.evidence_options())
+        opts = self.evidence_options()
+        if disable_print is not None:
+            opts["progress"] = not bool(disable_print)
+        counts = count_evidence(self.grid, self.poses, self.scans, **opts)
         self.counts = counts
         if self.semantic:
             self.map['alpha'] = self.prior_alpha + counts
@@ -143,6 +183,9 @@ class CountingSensorMap:
         else:
             self.map['mean'], self.map['variance'] = beta_mean_variance(self.map['alpha'],
                                                                         self.map['beta'])
+        if not (np.all(np.isfinite(self.map['mean'])) and np.all(np.isfinite(self.map['variance']))):
+            raise InputError("the posterior mean or variance is not finite: lower prior_alpha or "
+                             "sigma.")
 
     @property
     def observed(self) -> np.ndarray:
