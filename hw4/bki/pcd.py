@@ -3,9 +3,10 @@
 The toy scans of BKISemanticMapping carry a fifth value (always ``-1``) on every ASCII data line
 although the header declares four fields; current PCL skips such lines and returns an empty cloud.
 This reader keeps the declared columns and ignores trailing extras. Anything truly malformed (a
-missing or inconsistent header entry, too few values on a line, too few lines or bytes, a value
-that is not a number) raises :class:`~hw4.errors.InputError` with one sentence; it never returns a
-silently empty or shortened cloud.
+missing, repeated or inconsistent header entry, a field name used twice, too few values on a
+line, too few or too many lines or bytes for ``POINTS``, a value that is not a number of the
+declared type) raises :class:`~hw4.errors.InputError` with one sentence; it never returns a
+silently empty, shortened or truncated cloud. Fields named ``_`` are PCL's padding: skipped.
 
 ``binary_compressed`` (LZF) files are rejected with a clear message: convert them with
 ``pcl_convert_pcd_ascii_binary`` first.
@@ -69,14 +70,25 @@ def _parse_header(raw: bytes, name: str) -> tuple[dict, int]:
                        "POINTS", "DATA"):
             raise InputError(f"{name}: unexpected PCD header line {line[:60]!r} before DATA; "
                              "the header is malformed.")
+        if key in header:
+            raise InputError(f"{name}: the PCD header has two {key} lines; keep the one that is right.")
         header[key] = vals
         if key == "DATA":
             return header, pos
 
 
+MAX_COUNT = 1 << 20  # largest COUNT accepted (PCL's widest descriptors hold a few hundred)
+PADDING = "_"        # PCL's name for padding fields: skipped, and they may repeat
+
+
+def _digits(text: str) -> bool:
+    """True for a non-empty string of ASCII digits (``str.isdigit`` also accepts '²')."""
+    return text.isascii() and text.isdigit()
+
+
 def _int_entry(header: dict, key: str, name: str) -> int:
     vals = header[key]
-    if len(vals) != 1 or not vals[0].isdigit():
+    if len(vals) != 1 or not _digits(vals[0]):
         raise InputError(f"{name}: PCD header {key} must be one non-negative integer; got {' '.join(vals)!r}.")
     return int(vals[0])
 
@@ -110,9 +122,17 @@ def read_pcd(path) -> PCD:
                          f"entries ({len(names)}, {len(sizes)}, {len(types)}, {len(counts)}).")
     dtypes = []
     for f, s, t, c in zip(names, sizes, types, counts):
-        if not (s.isdigit() and c.isdigit() and int(c) >= 1) or (t.upper(), int(s)) not in _TYPES:
+        if not (_digits(s) and _digits(c) and int(c) >= 1) or (t.upper(), int(s)) not in _TYPES:
             raise InputError(f"{name}: field {f!r} has an unsupported SIZE/TYPE/COUNT {s}/{t}/{c}.")
+        if int(c) > MAX_COUNT:
+            raise InputError(f"{name}: field {f!r} has COUNT {c}, more than the {MAX_COUNT} values "
+                             "per point this reader accepts; the header is malformed.")
         dtypes.append((f, _TYPES[(t.upper(), int(s))], int(c)))
+    real = [f for f in names if f != PADDING]
+    dup = sorted({f for f in real if real.count(f) > 1})
+    if dup:
+        raise InputError(f"{name}: the PCD header names field {dup[0]!r} twice in FIELDS; every field "
+                         f"needs its own name ('{PADDING}' only for padding).")
     width = _int_entry(header, "WIDTH", name)
     height = _int_entry(header, "HEIGHT", name)
     n = _int_entry(header, "POINTS", name)
@@ -137,25 +157,39 @@ def read_pcd(path) -> PCD:
         for f, dt, c in dtypes:
             block = table[:, j:j + c]
             j += c
+            if f == PADDING:
+                continue
+            info = np.iinfo(dt) if np.dtype(dt).kind in "iu" else np.finfo(dt)
             if np.dtype(dt).kind in "iu":
-                info = np.iinfo(dt)
-                if np.any((block != np.round(block)) | (block < info.min) | (block > info.max)):
+                bad = (block != np.round(block)) | (block < info.min) | (block >= float(info.max) + 1)
+                if np.any(bad):
                     raise InputError(f"{name}: field {f!r} is declared as {np.dtype(dt).name} but holds "
-                                     "a value that is not such an integer.")
+                                     f"the value {block[bad][0]:g}, which is not such an integer.")
+            elif np.any(np.isfinite(block) & (np.abs(block) > info.max)):
+                raise InputError(f"{name}: field {f!r} is declared as {np.dtype(dt).name} but holds a "
+                                 f"value beyond its range ({np.abs(block[np.isfinite(block)]).max():g}).")
             cols[f] = (block[:, 0] if c == 1 else block).astype(dt)
     elif kind == "binary":
-        rec = np.dtype([(f, dt, (c,)) if c > 1 else (f, dt) for f, dt, c in dtypes])
-        need = n * rec.itemsize
-        if len(raw) - start < need:
-            raise InputError(f"{name}: binary PCD data is truncated ({len(raw) - start} bytes for "
-                             f"{n} points of {rec.itemsize} bytes = {need}).")
+        itemsize = sum(np.dtype(dt).itemsize * c for _, dt, c in dtypes)
+        need = n * itemsize
+        have = len(raw) - start
+        if have < need:
+            raise InputError(f"{name}: binary PCD data is truncated ({have} bytes for "
+                             f"{n} points of {itemsize} bytes = {need}).")
+        if raw[start + need:].strip(b"\r\n"):
+            raise InputError(f"{name}: binary PCD data holds {have - need} bytes more than its "
+                             f"{n} POINTS of {itemsize} bytes; the header or the file is wrong.")
+        rec = np.dtype({"names": [f"f{i}" for i in range(len(dtypes))],
+                        "formats": [(dt, (c,)) if c > 1 else dt for _, dt, c in dtypes]})
         arr = np.frombuffer(raw, dtype=rec, count=n, offset=start)
-        cols = {f: arr[f].copy() for f, _, _ in dtypes}
+        cols = {f: arr[f"f{i}"].copy() for i, (f, _, _) in enumerate(dtypes) if f != PADDING}
     elif kind == "binary_compressed":
         raise InputError(f"{name}: DATA binary_compressed (LZF) PCD files are not supported; convert "
                          "to ascii or binary first with pcl_convert_pcd_ascii_binary.")
     else:
         raise InputError(f"{name}: unknown PCD DATA kind {kind!r}; expected ascii or binary.")
+    if not cols:
+        raise InputError(f"{name}: the PCD declares only padding fields ('{PADDING}').")
     return PCD(cols, viewpoint, kind, header)
 
 
@@ -165,7 +199,9 @@ def _read_ascii(body: bytes, n: int, ncol: int, name: str) -> np.ndarray:
     if len(lines) < n:
         raise InputError(f"{name}: PCD header declares {n} points but the data has only "
                          f"{len(lines)} lines; the file is truncated.")
-    lines = lines[:n]
+    if len(lines) > n:
+        raise InputError(f"{name}: PCD header declares {n} points but the data has {len(lines)} "
+                         "lines; fix POINTS/WIDTH or remove the extra lines.")
     if n == 0:
         return np.zeros((0, ncol))
     rows = [ln.split() for ln in lines]
@@ -207,5 +243,18 @@ def read_labelled_scan(path, label_field: str = "label") -> Scan:
     if need:
         raise InputError(f"{Path(path).name}: the PCD has no field {need[0]!r} (fields: "
                          f"{' '.join(pcd.fields)}); a labelled scan needs x y z {label_field}.")
+    wide = [f for f in ("x", "y", "z", label_field) if pcd.fields[f].ndim != 1]
+    if wide:
+        raise InputError(f"{Path(path).name}: the PCD field {wide[0]!r} has COUNT > 1; a labelled scan "
+                         "needs one value per point in x y z and the label.")
     pts = np.column_stack([pcd.fields[c].astype(float) for c in "xyz"])
-    return Scan(pts, pcd.fields[label_field].astype(np.int64), pcd.viewpoint[:3].copy(), Path(path).name)
+    lab = pcd.fields[label_field]
+    if lab.dtype.kind == "f":
+        bad = ~np.isfinite(lab) | (lab != np.round(lab)) | (np.abs(lab) > 2.0 ** 31)
+        if bad.any():
+            i = int(np.flatnonzero(bad)[0])
+            raise InputError(f"{Path(path).name}: point {i} has label {lab[i]:g}, which is not an "
+                             "integer class id.")
+    elif lab.dtype == np.uint64 and len(lab) and lab.max() > np.iinfo(np.int64).max:
+        raise InputError(f"{Path(path).name}: a label exceeds the largest class id this reader takes.")
+    return Scan(pts, lab.astype(np.int64), pcd.viewpoint[:3].copy(), Path(path).name)
