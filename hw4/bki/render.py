@@ -36,12 +36,36 @@ class Camera:
     lo: tuple
     hi: tuple
     zoom: float = 1.2
+    persp: bool = False
+    """Perspective projection (a view from the car) instead of the orthographic overview."""
+
+    def inside(self, centres: np.ndarray) -> np.ndarray:
+        """(M,) bool: which voxel centres [m] lie in the camera's box (the part drawn)."""
+        return np.all((centres >= np.asarray(self.lo)) & (centres <= np.asarray(self.hi)), axis=1)
 
 
 def camera_for(views, elev: float = 38.0, azim: float = -115.0, pad: float = 0.2) -> Camera:
     """One camera framing the occupied voxels of all ``views`` (so every panel looks the same)."""
     pts = np.vstack([v.centres[v.occupied] for v in views if v.occupied.any()] or [np.zeros((1, 3))])
     return Camera(elev, azim, tuple(pts.min(0) - pad), tuple(pts.max(0) + pad))
+
+
+def chase_camera(trajectory: np.ndarray, behind: float = 14.0, ahead: float = 26.0,
+                 side: float = 16.0, below: float = 2.6, above: float = 4.0, elev: float = 24.0,
+                 zoom: float = 1.25) -> Camera:
+    """A camera behind and above the car, looking along its direction of travel (as an RViz view
+    that follows the car): the box spans ``behind`` m before the first pose to ``ahead`` m past the
+    last, ``side`` m either side and ``below``/``above`` m around the sensor height.
+
+    ``trajectory`` is the (T, 3) sensor origins [m], world frame; the heading is that of the
+    displacement from the first to the last origin (the x axis when the car has not moved).
+    """
+    p = np.asarray(trajectory, float)
+    d = p[-1, :2] - p[0, :2]
+    heading = np.degrees(np.arctan2(d[1], d[0])) if np.hypot(*d) > 1e-6 else 0.0
+    lo = (min(p[:, 0].min() - behind, p[:, 0].min() - side), p[:, 1].min() - side, p[:, 2].min() - below)
+    hi = (max(p[:, 0].max() + ahead, p[:, 0].max() + side), p[:, 1].max() + side, p[:, 2].max() + above)
+    return Camera(elev, heading + 180.0, lo, hi, zoom=zoom, persp=True)
 
 
 def _view_vector(cam: Camera) -> np.ndarray:
@@ -59,7 +83,8 @@ def visible_faces(idx: np.ndarray, cam: Camera):
     """
     key = lambda a: (a[:, 0] + (1 << 20)) * (1 << 42) + (a[:, 1] + (1 << 20)) * (1 << 21) + (a[:, 2] + (1 << 20))
     keys = np.sort(key(idx))
-    toward = _DIRS @ _view_vector(cam) > 0
+    # perspective: a face turned slightly away from the view axis can still be seen off-centre
+    toward = _DIRS @ _view_vector(cam) > (-0.5 if cam.persp else 0.0)
     vox, dirs = [], []
     for d in np.flatnonzero(toward):
         nb = key(idx + _DIRS[d])
@@ -87,10 +112,12 @@ def draw_voxels(ax, centres: np.ndarray, rgb: np.ndarray, resolution: float, cam
     ax.set_ylim(cam.lo[1], cam.hi[1])
     ax.set_zlim(cam.lo[2], cam.hi[2])
     ax.set_box_aspect(np.array(cam.hi) - np.array(cam.lo), zoom=cam.zoom)
+    if cam.persp:
+        ax.set_proj_type("persp", focal_length=0.5)
     ax.set_xlabel("x [m]", labelpad=-6)
     ax.set_ylabel("y [m]", labelpad=-6)
     ax.set_zlabel("z [m]", labelpad=-10)
-    ax.tick_params(labelsize=6, pad=-3)
+    ax.tick_params(labelsize=8, pad=-2)
     if len(centres) == 0:
         return
     idx = np.floor(centres / resolution).astype(np.int64)
@@ -106,10 +133,17 @@ def class_rgb(view: MapView, mask: np.ndarray) -> np.ndarray:
     return class_colors(view.probs.shape[1])[view.cls[mask]] / 255.0
 
 
-def scalar_rgb(values: np.ndarray, vmax: float, cmap: str = "viridis") -> np.ndarray:
-    """(M, 3) colours in [0, 1] of scalars on ``[0, vmax]``."""
+def variance_norm(vmax: float, log: bool = False):
+    """The colour scale of variances: linear on ``[0, vmax]`` or logarithmic on
+    ``[vmax / 1000, vmax]`` (clipped at both ends)."""
+    from matplotlib.colors import LogNorm, Normalize
+    return LogNorm(vmax / 1000, vmax, clip=True) if log else Normalize(0, vmax, clip=True)
+
+
+def scalar_rgb(values: np.ndarray, vmax: float, cmap: str = "viridis", log: bool = False) -> np.ndarray:
+    """(M, 3) colours in [0, 1] of scalars on the scale of :func:`variance_norm`."""
     from matplotlib import colormaps
-    return colormaps[cmap](np.clip(values / vmax, 0, 1))[:, :3]
+    return colormaps[cmap](np.ma.filled(variance_norm(vmax, log)(np.asarray(values, float)), 1.0))[:, :3]
 
 
 def topdown(view: MapView, mask: np.ndarray, values: np.ndarray | None = None, lo=None, hi=None):
@@ -196,19 +230,37 @@ def _mask(view: MapView, which: str) -> np.ndarray:
     raise ValueError(f"unknown voxel selection {which!r}")
 
 
+def draw_trajectory(ax, trajectory: np.ndarray, lift: float = 0.3) -> None:
+    """The sensor origins (T, 3) [m] as a line with a dot per scan, ``lift`` m above the sensor,
+    drawn over the voxels (on a 3D axis) or on a top view (2D axis)."""
+    p = np.asarray(trajectory, float)
+    kw = dict(color="black", lw=1.6, marker="o", ms=3.2, mfc="white", mec="black", mew=0.8,
+              zorder=1000, label="car trajectory")
+    if getattr(ax, "name", "") == "3d":
+        ax.computed_zorder = False
+        ax.plot(p[:, 0], p[:, 1], p[:, 2] + lift, **kw)
+    else:
+        ax.plot(p[:, 0], p[:, 1], **kw)
+
+
 def plot_maps(views: dict, cam: Camera, colour: str = "class", which: str = "occupied",
-              vmax: float = 0.09, width: float = 5.0, fig=None):
+              vmax: float = 0.09, width: float = 5.0, fig=None, trajectory=None,
+              legend_cols: int = 1, log_variance: bool = False):
     """3D voxel renders of several maps side by side, all seen from the same camera.
 
     Parameters
     ----------
     views : dict of title -> MapView
-    cam : Camera
+    cam : Camera (only voxels inside its box are drawn)
     colour : {"class", "variance"}
     which : {"occupied", "reference"}
         Occupied voxels with ``var_thresh`` applied, or as the reference shows them (without).
     vmax : float, top of the variance colour scale
     width : float [inch] per panel
+    trajectory : (T, 3) array [m], optional
+        Sensor origins, drawn as the car's path.
+    legend_cols : int, columns of the class legend
+    log_variance : bool, logarithmic variance scale (see :func:`variance_norm`)
     """
     import matplotlib.pyplot as plt
     n = len(views)
@@ -219,44 +271,62 @@ def plot_maps(views: dict, cam: Camera, colour: str = "class", which: str = "occ
     axes = []
     for i, (title, v) in enumerate(views.items()):
         ax = fig.add_subplot(1, n, i + 1, projection="3d")
-        m = _mask(v, which)
-        rgb = class_rgb(v, m) if colour == "class" else scalar_rgb(v.variance[m], vmax)
+        m = _mask(v, which) & cam.inside(v.centres)
+        rgb = class_rgb(v, m) if colour == "class" else scalar_rgb(v.variance[m], vmax, log=log_variance)
         draw_voxels(ax, v.centres[m], rgb, v.resolution, cam)
+        if trajectory is not None:
+            draw_trajectory(ax, trajectory)
         ax.set_title(title, fontsize=10)
         axes.append(ax)
     if colour == "variance":
-        variance_colorbar(fig, axes, vmax)
+        variance_colorbar(fig, axes, vmax, log=log_variance)
     else:
-        _class_legend(fig, views, loc="center right")
+        _class_legend(fig, views, loc="center right", cam=cam, ncol=legend_cols,
+                      trajectory=trajectory is not None)
     return fig
 
 
-def variance_colorbar(fig, axes, vmax: float):
-    """A colour bar for variance colours on ``[0, vmax]`` beside ``axes``."""
+def variance_colorbar(fig, axes, vmax: float, log: bool = False):
+    """A colour bar for variance colours (scale of :func:`variance_norm`) beside ``axes``."""
     from matplotlib.cm import ScalarMappable
-    from matplotlib.colors import Normalize
-    return fig.colorbar(ScalarMappable(Normalize(0, vmax), "viridis"), ax=axes, shrink=0.6,
+    return fig.colorbar(ScalarMappable(variance_norm(vmax, log), "viridis"), ax=axes, shrink=0.6,
                         pad=0.02, label="variance of the most likely class")
 
 
-def _class_legend(fig, views, loc: str = "lower center") -> None:
+def _class_legend(fig, views, loc: str = "lower center", cam: Camera | None = None,
+                  ncol: int | None = None, trajectory: bool = False) -> None:
+    """A legend of the classes shown (occupied voxels inside ``cam``'s box), 9 pt."""
+    from matplotlib.lines import Line2D
     from matplotlib.patches import Patch
     from .palette import class_names
     v = next(iter(views.values()))
     K = v.probs.shape[1]
-    present = sorted(set(np.concatenate([w.cls[w.occupied] for w in views.values()]).tolist()) - {0})
+    shown = [w.cls[w.occupied & (cam.inside(w.centres) if cam is not None else True)]
+             for w in views.values()]
+    present = sorted(set(np.concatenate(shown).tolist()) - {0})
     pal, names = class_colors(K) / 255.0, class_names(K)
-    fig.legend(handles=[Patch(color=pal[k], label=names[k]) for k in present], loc=loc,
-               ncol=1 if loc == "center right" else (min(len(present), 6) or 1), fontsize=8,
-               frameon=False)
+    handles = [Patch(color=pal[k], label=names[k]) for k in present]
+    if trajectory:
+        handles.append(Line2D([], [], color="black", lw=1.6, marker="o", ms=3.2, mfc="white",
+                              mec="black", label="car trajectory"))
+    if ncol is None:
+        ncol = 1 if loc == "center right" else (min(len(handles), 6) or 1)
+    fig.legend(handles=handles, loc=loc, ncol=ncol, fontsize=9, frameon=False,
+               handlelength=1.2, handletextpad=0.5, columnspacing=1.0)
 
 
 def plot_topdown(views: dict, cam: Camera, colour: str = "class", which: str = "occupied",
-                 vmax: float = 0.09, width: float = 4.0):
-    """Top views of several maps side by side (highest selected voxel per column), same extent."""
+                 vmax: float = 0.09, width: float = 4.0, trajectory=None, log_variance: bool = False):
+    """Top views of several maps side by side (highest selected voxel per column), same extent.
+
+    ``trajectory`` (T, 3) [m] draws the car's path; ``log_variance`` puts the variance on a
+    logarithmic colour scale from ``vmax / 1000`` to ``vmax`` (real scans span several decades).
+    """
     import matplotlib.pyplot as plt
     n = len(views)
-    fig, axes = plt.subplots(1, n, figsize=(width * n + (0.8 if colour == "variance" else 0), width * 1.1),
+    aspect = (cam.hi[1] - cam.lo[1]) / max(cam.hi[0] - cam.lo[0], 1e-9)
+    height = min(width * aspect, width * 1.5) + (0.9 if colour == "variance" or trajectory is None else 1.3)
+    fig, axes = plt.subplots(1, n, figsize=(width * n + (0.8 if colour == "variance" else 0), height),
                              squeeze=False, layout="constrained")
     im = None
     for ax, (title, v) in zip(axes[0], views.items()):
@@ -268,8 +338,11 @@ def plot_topdown(views: dict, cam: Camera, colour: str = "class", which: str = "
         else:
             img, ext = topdown(v, m, values=v.variance, lo=cam.lo[:2], hi=cam.hi[:2])
             ax.set_facecolor((0.92, 0.92, 0.92))
-            im = ax.imshow(img, origin="lower", extent=ext, cmap="viridis", vmin=0, vmax=vmax,
+            im = ax.imshow(img, origin="lower", extent=ext, cmap="viridis",
+                           norm=variance_norm(vmax, log_variance),
                            interpolation="nearest")
+        if trajectory is not None:
+            draw_trajectory(ax, trajectory)
         ax.set_title(title, fontsize=10)
         ax.set_xlabel("x [m]")
         ax.set_ylabel("y [m]")
@@ -277,7 +350,8 @@ def plot_topdown(views: dict, cam: Camera, colour: str = "class", which: str = "
     if im is not None:
         fig.colorbar(im, ax=axes[0].tolist(), shrink=0.8, label="variance of the most likely class")
     else:
-        _class_legend(fig, views, loc="outside lower center")
+        _class_legend(fig, views, loc="outside lower center", cam=cam,
+                      trajectory=trajectory is not None)
     return fig
 
 
@@ -332,7 +406,8 @@ def plot_slices(panels: dict, z: float, cam: Camera, width: float = 4.0):
 
 
 def mapping_video(view_groups, cam: Camera, titles, gif=None, mp4=None, strip=None,
-                  strip_scans=None, width: float = 4.0, dpi: int = 75, fps: float = 2.0) -> list:
+                  strip_scans=None, width: float = 4.0, dpi: int = 75, fps: float = 2.0,
+                  trajectory=None) -> list:
     """Render the map after each scan (methods side by side) and write GIF, MP4 and a PNG strip.
 
     Parameters
@@ -344,6 +419,8 @@ def mapping_video(view_groups, cam: Camera, titles, gif=None, mp4=None, strip=No
         Where to write the animation (GIF, MP4) and a PNG of some frames stacked (for print).
     strip_scans : sequence of int, optional
         1-based scan numbers of the strip's frames (default: four evenly spaced, ending with the last).
+    trajectory : (T, 3) array [m], optional
+        Sensor origins; frame ``i`` draws the path up to scan ``i``.
 
     Returns
     -------
@@ -352,7 +429,8 @@ def mapping_video(view_groups, cam: Camera, titles, gif=None, mp4=None, strip=No
     import matplotlib.pyplot as plt
     frames = []
     for i, views in enumerate(view_groups):
-        fig = plot_maps({f"{t}, scan {i + 1}": v for t, v in zip(titles, views)}, cam, width=width)
+        fig = plot_maps({f"{t}, scan {i + 1}": v for t, v in zip(titles, views)}, cam, width=width,
+                        trajectory=None if trajectory is None else np.asarray(trajectory)[:i + 1])
         fig.set_dpi(dpi)
         frames.append(figure_to_array(fig))
         plt.close(fig)

@@ -1,0 +1,145 @@
+"""The map's exports for other tools: the MCAP recording (ROS 2 MarkerArray) and the offline
+interactive HTML view."""
+from __future__ import annotations
+
+import re
+
+import numpy as np
+import pytest
+
+from hw4.bki import interactive, ros2_mcap
+from hw4.bki.palette import class_colors, class_names
+from hw4.bki.voxelmap import VoxelMap
+
+
+def small_map(points, labels, num_class=4, method="scsm", resolution=0.5):
+    vm = VoxelMap(resolution, num_class, method)
+    vm.update(np.asarray(points, float), np.asarray(labels))
+    return vm.view()
+
+
+# ---- MCAP ---------------------------------------------------------------------------------------
+
+def test_mcap_round_trip_every_message_decodes_to_the_map(tmp_path):
+    a = small_map([[0.1, 0.1, 0.1], [0.6, 0.1, 0.1], [2.1, 0.1, 0.1], [0.1, 3.1, 0.1]], [1, 1, 2, 3])
+    # in the second map class 3 is gone (a free sample outvotes it) and class 2 has moved
+    b = small_map([[0.1, 0.1, 0.1], [2.6, 0.1, 0.1], [0.1, 3.1, 0.1], [0.1, 3.2, 0.1],
+                   [0.1, 3.3, 0.1]], [1, 2, 0, 0, 3])
+    origins = [[0.0, 0.0, 1.0], [1.0, 0.5, 1.2]]
+    path = tmp_path / "map.mcap"
+    with ros2_mcap.MapRecorder(path, rate=10.0, t0_ns=5_000_000_000) as rec:
+        rec.add(a, origins[0])
+        rec.add(b, origins[1])
+    assert not (tmp_path / "map.mcap.partial").exists()
+    msgs = ros2_mcap.read_markers(path)
+    assert [(t, n) for t, n, _ in msgs] == [("/semantic_map", 5_000_000_000), ("/trajectory", 5_000_000_000),
+                                            ("/semantic_map", 5_100_000_000), ("/trajectory", 5_100_000_000)]
+    pal, names = class_colors(4) / 255.0, class_names(4)
+    for (topic, _, msg), view in ((msgs[0], a), (msgs[2], b)):
+        occ = view.occupied
+        live = [m for m in msg.markers if m.action == ros2_mcap.ADD]
+        assert sorted(m.id for m in live) == sorted(set(view.cls[occ].tolist()))
+        for m in live:
+            assert m.type == ros2_mcap.CUBE_LIST and m.header.frame_id == "map"
+            assert m.ns == names[m.id]
+            assert (m.scale.x, m.scale.y, m.scale.z) == (view.resolution,) * 3
+            np.testing.assert_allclose([m.color.r, m.color.g, m.color.b, m.color.a],
+                                       [*pal[m.id], 1.0], rtol=1e-6)
+            got = np.array([[p.x, p.y, p.z] for p in m.points])
+            np.testing.assert_array_equal(got, view.centres[occ & (view.cls == m.id)])
+    gone = [m for m in msgs[2][2].markers if m.action == ros2_mcap.DELETE]
+    assert gone
+    assert [m.id for m in gone] == sorted(set(a.cls[a.occupied].tolist()) - set(b.cls[b.occupied].tolist()))
+    path_msg = msgs[3][2].markers[0]
+    assert path_msg.type == ros2_mcap.LINE_STRIP
+    np.testing.assert_array_equal([[p.x, p.y, p.z] for p in path_msg.points], origins)
+
+
+def test_our_cdr_bytes_equal_the_mcap_ros2_encoder(tmp_path):
+    """The numpy CDR layout is byte-identical to what mcap-ros2-support's encoder writes."""
+    from mcap.reader import make_reader
+    from mcap_ros2.writer import Writer
+
+    view = small_map([[0.1, 0.1, 0.1], [0.6, 0.1, 0.1], [2.1, 0.7, 0.1]], [1, 1, 2])
+    ours, _ = ros2_mcap.map_message(view, 1_234_567_890_123, previous={3})
+    occ = view.occupied
+    pal, names = class_colors(4) / 255.0, class_names(4)
+
+    def marker(k, action, pts):
+        return {"header": {"stamp": {"sec": 1234, "nanosec": 567_890_123}, "frame_id": "map"},
+                "ns": names[k], "id": k, "type": 6, "action": action,
+                "pose": {"position": {"x": 0.0, "y": 0.0, "z": 0.0},
+                         "orientation": {"x": 0.0, "y": 0.0, "z": 0.0, "w": 1.0}},
+                "scale": {"x": 0.5, "y": 0.5, "z": 0.5},
+                "color": {"r": pal[k][0], "g": pal[k][1], "b": pal[k][2], "a": 1.0},
+                "lifetime": {"sec": 0, "nanosec": 0}, "frame_locked": False,
+                "points": [{"x": x, "y": y, "z": z} for x, y, z in pts], "colors": [],
+                "texture_resource": "", "texture": {"header": {"stamp": {"sec": 0, "nanosec": 0},
+                                                               "frame_id": ""}, "format": "", "data": b""},
+                "uv_coordinates": [], "text": "", "mesh_resource": "",
+                "mesh_file": {"filename": "", "data": b""}, "mesh_use_embedded_materials": False}
+
+    msg = {"markers": [marker(k, 0, view.centres[occ & (view.cls == k)]) for k in (1, 2)]
+           + [marker(3, 2, [])]}
+    ref = tmp_path / "ref.mcap"
+    with open(ref, "wb") as f:
+        w = Writer(f)
+        schema = w.register_msgdef("visualization_msgs/msg/MarkerArray", ros2_mcap.MARKER_ARRAY_DEF)
+        w.write_message("/semantic_map", schema, msg, log_time=0, publish_time=0)
+        w.finish()
+    with open(ref, "rb") as f:
+        (_, _, raw), = list(make_reader(f).iter_messages())
+    assert raw.data == ours
+
+
+def test_mcap_failure_leaves_no_file(tmp_path):
+    path = tmp_path / "map.mcap"
+    view = small_map([[0.1, 0.1, 0.1]], [1])
+    with pytest.raises(RuntimeError):
+        with ros2_mcap.MapRecorder(path) as rec:
+            rec.add(view, [0, 0, 0])
+            raise RuntimeError("interrupted")
+    assert list(tmp_path.iterdir()) == []
+
+
+# ---- interactive view ---------------------------------------------------------------------------
+
+def test_cube_mesh_hides_shared_faces():
+    v, t = interactive.cube_mesh(np.array([[0, 0, 0]]), 0.3)
+    assert v.shape == (8, 3) and t.shape == (12, 3)
+    np.testing.assert_allclose(np.unique(v), [0.0, 0.3], rtol=1e-6)
+    v, t = interactive.cube_mesh(np.array([[0, 0, 0], [1, 0, 0]]), 1.0)
+    assert v.shape == (12, 3) and t.shape == (20, 3)   # 10 exposed faces, the shared one hidden
+    # every triangle is a real one (three distinct corners) and lies on a cube face
+    assert all(len(set(tri)) == 3 for tri in t.tolist())
+    tri = v[t]
+    assert np.all(np.ptp(tri, axis=1).min(axis=1) == 0)
+
+
+def test_aggregate_takes_the_most_frequent_class():
+    idx = np.array([[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 1], [2, 0, 0], [3, 1, 1]])
+    cls = np.array([5, 7, 7, 5, 3, 9])
+    big, c = interactive.aggregate(idx, cls, 2)
+    got = {tuple(b): k for b, k in zip(big.tolist(), c.tolist())}
+    assert got == {(0, 0, 0): 5, (1, 0, 0): 3}   # 5 and 7 tie twice each: the smaller class wins
+
+
+def test_interactive_page_is_offline_and_complete(tmp_path):
+    rng = np.random.default_rng(0)
+    pts = rng.uniform(0, 5, size=(400, 3))
+    lab = rng.integers(1, 4, size=400)
+    view = small_map(pts, lab, method="sbki", resolution=0.25)
+    info = interactive.write_interactive(view, tmp_path / "map3d.html", trajectory=[[0, 0, 0], [1, 0, 0]],
+                                         max_voxels=10 ** 6)
+    html = (tmp_path / "map3d.html").read_text()
+    assert (tmp_path / "plotly.min.js").stat().st_size > 1_000_000
+    assert not re.search(r"<(script|link)[^>]+(src|href)=\"https?://", html)  # no CDN
+    assert 'src="plotly.min.js"' in html
+    assert info["factor"] == 1 and info["voxels"] == int(view.occupied.sum())
+    fig, _ = interactive.interactive_figure(view, trajectory=[[0, 0, 0], [1, 0, 0]], max_voxels=10 ** 6)
+    names = [t.name for t in fig.data]
+    want = [class_names(4)[k] for k in np.unique(view.cls[view.occupied])]
+    assert names == want + ["car trajectory"]
+    # aggregation bounds the voxel count
+    small = interactive.write_interactive(view, tmp_path / "small.html", max_voxels=50)
+    assert small["factor"] > 1 and small["voxels"] <= 50
