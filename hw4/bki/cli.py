@@ -9,8 +9,11 @@ import argparse
 import sys
 from pathlib import Path
 
+import numpy as np
+
+from ..atomic import Outputs
 from ..errors import InputError
-from .config import DATASETS, load_config
+from .config import DATASETS, check_method, load_config
 from .voxelmap import METHODS
 
 DESCRIPTION = """\
@@ -71,15 +74,11 @@ def run_bki(args) -> int:
     """Run the ``bki`` command; return the exit code (errors raise :class:`InputError`)."""
     import matplotlib
     matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-    from tqdm import tqdm
 
-    from . import render
-    from .io import write_csv, write_ply
-    from .pipeline import map_scans, new_map, scan_source
-    from .voxelmap import FREE, OCCUPIED, UNKNOWN
+    from .pipeline import scan_source
 
-    cfg = load_config(args.config if args.config else args.dataset)
+    cfg = load_config(args.config, defaults=args.dataset) if args.config else load_config(args.dataset)
+    check_method(cfg, args.method)
     n = cfg.scans if args.scans is None else args.scans
     if n < 0:
         raise InputError(f"--scans must be 0 (all) or a positive number; got {n}.")
@@ -92,14 +91,22 @@ def run_bki(args) -> int:
     if n:
         loaders = loaders[:n]
     out = args.out or Path("out") / "bki" / f"{args.dataset}_{args.method}"
-    if out.exists() and not out.is_dir():
-        raise InputError(f"--out {out} is a file, not a folder: choose another --out.")
     ours = ["voxels.csv", "voxels.ply", "mapping.gif", "mapping.mp4"] + [
         f"map3d_{c}{s}.png" for c in ("class", "variance") for s in ("", "_no_var_thresh")] + [
         "topdown_class.png", "topdown_variance.png"]
-    existing = [out / f for f in ours if (out / f).exists()]
-    if existing and not getattr(args, "force", False):
-        raise InputError(f"{existing[0]} already exists: choose another --out or pass --force.")
+    with Outputs(out, ours, force=getattr(args, "force", False)) as o:
+        return _map_and_write(args, cfg, loaders, out, o)
+
+
+def _map_and_write(args, cfg, loaders, out, o) -> int:
+    """Map the scans and write every output through ``o`` (:class:`hw4.atomic.Outputs`)."""
+    import matplotlib.pyplot as plt
+    from tqdm import tqdm
+
+    from . import render
+    from .io import write_csv, write_ply
+    from .pipeline import map_scans, new_map
+    from .voxelmap import FREE, OCCUPIED, UNKNOWN
 
     vmap = new_map(cfg, args.method)
     hits = free = 0
@@ -108,15 +115,17 @@ def run_bki(args) -> int:
         hits += step.training.n_hits
         free += step.training.n_free
     view = vmap.view()
-    if len(view) == 0:
+    if len(view) == 0 and hits == 0:
         raise InputError(f"the {len(loaders)} scan(s) gave no training points within max_range "
                          f"{cfg.max_range} m (or no labelled hits): the map would be empty.")
-    try:
-        out.mkdir(parents=True, exist_ok=True)
-    except OSError as e:
-        raise InputError(f"cannot create the output folder {out} ({e.strerror}).") from None
-    write_csv(view, out / "voxels.csv")
-    write_ply(view, out / "voxels.ply")
+    if len(view) == 0:
+        raise InputError(f"the {hits:,} training hits and {free:,} free points reached no voxel "
+                         f"centre within ell {cfg.ell} m: resolution {cfg.resolution} m is too "
+                         "coarse for ell (use a resolution below 2 ell).")
+    if not (np.all(np.isfinite(view.probs)) and np.all(np.isfinite(view.variance))):
+        raise InputError("the map's class probabilities are not finite: lower sf2 or prior.")
+    write_csv(view, o["voxels.csv"])
+    write_ply(view, o["voxels.ply"])
     written = ["voxels.csv", "voxels.ply"]
     title = {"sbki": "S-BKI", "scsm": "S-CSM"}[args.method]
     if not args.no_figures and len(view):
@@ -125,17 +134,17 @@ def run_bki(args) -> int:
             for which in ("occupied", "reference"):
                 name = f"map3d_{colour}{'' if which == 'occupied' else '_no_var_thresh'}.png"
                 fig = render.plot_maps({title: view}, cam, colour, which, vmax=cfg.var_thresh)
-                fig.savefig(out / name, dpi=110, bbox_inches="tight")
+                fig.savefig(o[name], dpi=110, bbox_inches="tight")
                 plt.close(fig)
                 written.append(name)
             fig = render.plot_topdown({title: view}, cam, colour, vmax=cfg.var_thresh)
-            fig.savefig(out / f"topdown_{colour}.png", dpi=110)
+            fig.savefig(o[f"topdown_{colour}.png"], dpi=110)
             plt.close(fig)
             written.append(f"topdown_{colour}.png")
     if args.video:  # a second pass, now that the final map fixes the camera of every frame
         groups = ((step.map.view(),) for step in map_scans(loaders, cfg, args.method))
-        render.mapping_video(groups, render.camera_for([view]), (title,), out / "mapping.gif",
-                             out / "mapping.mp4", width=5.0)
+        render.mapping_video(groups, render.camera_for([view]), (title,), o["mapping.gif"],
+                             o["mapping.mp4"], width=5.0)
         written += ["mapping.gif", "mapping.mp4"]
     st = view.state
     print(f"{len(loaders)} scans: {hits:,} training hits and {free:,} free points "

@@ -42,24 +42,58 @@ class BKIConfig:
         return replace(self, **kw)
 
 
-def load_config(dataset_or_path: str | Path) -> BKIConfig:
+MIN_LENGTH = 1e-4     # smallest resolution, ds_resolution, free_resolution, ell [m] (0.1 mm)
+MAX_SCALE = 1e50      # largest sf2 and prior: beyond, the Dirichlet sums overflow
+MIN_PRIOR = 1e-100    # smallest prior
+MAX_CLASSES = 1 << 16  # SemanticKITTI label ids are 16-bit
+
+
+def _read(path: Path) -> dict:
+    try:
+        text = path.read_bytes().decode("utf-8")
+    except OSError as e:
+        raise InputError(f"cannot read the config {path} ({e.strerror}).") from None
+    except UnicodeDecodeError:
+        raise InputError(f"the config {path} is not a UTF-8 text file.") from None
+    try:
+        return tomllib.loads(text)
+    except tomllib.TOMLDecodeError as e:
+        raise InputError(f"the config {path} is not valid TOML ({str(e).splitlines()[0]}).") from None
+
+
+def _flatten(raw: dict, path: Path) -> dict:
+    """The settings of a config file, tables merged; a key given twice is refused."""
+    flat: dict = {}
+    where: dict = {}
+    for k, v in raw.items():
+        items = v.items() if isinstance(v, dict) else [(k, v)]
+        for key, value in items:
+            table = f"[{k}]" if isinstance(v, dict) else "the top level"
+            if isinstance(value, dict):
+                raise InputError(f"the config {path} nests a table [{k}.{key}]; use one level of "
+                                 "tables ([map], [training], ...).")
+            if key in flat:
+                raise InputError(f"the config {path} sets {key} twice ({where[key]} and {table}); "
+                                 "keep one.")
+            flat[key], where[key] = value, table
+    return flat
+
+
+def load_config(dataset_or_path: str | Path, defaults: str | None = None) -> BKIConfig:
     """Read a config: a dataset name (``toy``, ``semantickitti``) or a path to a TOML file.
 
     The TOML tables (``[map]``, ``[training]``, ...) only group the keys; every key must be a
-    field of :class:`BKIConfig`.
+    field of :class:`BKIConfig` and appear once. Keys a file leaves out take the values of the
+    dataset ``defaults`` (its ``configs/<dataset>.toml``) when given, else the toy values.
     """
     path = Path(dataset_or_path)
     if str(dataset_or_path) in DATASETS:
         path = CONFIG_DIR / f"{dataset_or_path}.toml"
-    try:
-        raw = tomllib.loads(path.read_text())
-    except OSError as e:
-        raise InputError(f"cannot read the config {path} ({e.strerror}).") from None
-    except tomllib.TOMLDecodeError as e:
-        raise InputError(f"the config {path} is not valid TOML ({e}).") from None
-    flat = {}
-    for k, v in raw.items():
-        flat.update(v if isinstance(v, dict) else {k: v})
+    if defaults is not None and defaults not in DATASETS:
+        raise InputError(f"unknown dataset {defaults!r}; use one of {', '.join(DATASETS)}.")
+    if path.is_dir():
+        raise InputError(f"the config {path} is a folder, not a TOML file.")
+    flat = _flatten(_read(path), path)
     known = {f.name: f.type for f in fields(BKIConfig)}
     unknown = sorted(set(flat) - set(known))
     if unknown:
@@ -75,13 +109,55 @@ def load_config(dataset_or_path: str | Path) -> BKIConfig:
         if not ok:
             kind = {int: "an integer", float: "a finite number", str: "a non-empty string"}[want]
             raise InputError(f"{name} in {path} must be {kind}; got {value!r}.")
-    cfg = BKIConfig(**flat)
+    base = BKIConfig()
+    if defaults is not None and path != CONFIG_DIR / f"{defaults}.toml":
+        base = load_config(defaults)
+    cfg = replace(base, **flat)
+    check_config(cfg, str(path))
+    return cfg
+
+
+def check_config(cfg: BKIConfig, where: str = "the config") -> None:
+    """Refuse settings that are out of range or would overflow (one sentence naming the setting)."""
     for name in ("resolution", "free_resolution", "ds_resolution", "ell", "sf2", "prior",
                  "var_thresh"):
-        if not getattr(cfg, name) > 0:
-            raise InputError(f"{name} in {path} must be positive; got {getattr(cfg, name)}.")
+        v = getattr(cfg, name)
+        if not (isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v)
+                and v > 0):
+            raise InputError(f"{name} in {where} must be positive; got {v}.")
+    for name in ("resolution", "free_resolution", "ds_resolution", "ell"):
+        if getattr(cfg, name) < MIN_LENGTH:
+            raise InputError(f"{name} in {where} is {getattr(cfg, name)} m, below {MIN_LENGTH:g} m "
+                             "(0.1 mm): check the units (metres).")
+    if cfg.sf2 > MAX_SCALE or not MIN_PRIOR <= cfg.prior <= MAX_SCALE:
+        name = "sf2" if cfg.sf2 > MAX_SCALE else "prior"
+        raise InputError(f"{name} in {where} is {getattr(cfg, name)}: sf2 must be at most "
+                         f"{MAX_SCALE:g} and prior between {MIN_PRIOR:g} and {MAX_SCALE:g}, or the "
+                         "class probabilities overflow.")
+    if not (isinstance(cfg.max_range, (int, float)) and math.isfinite(cfg.max_range)):
+        raise InputError(f"max_range in {where} must be a finite number; got {cfg.max_range}.")
     if cfg.num_class < 2:
-        raise InputError(f"num_class in {path} must be at least 2 (free and one class); got {cfg.num_class}.")
+        raise InputError(f"num_class in {where} must be at least 2 (free and one class); got {cfg.num_class}.")
+    if cfg.num_class > MAX_CLASSES:
+        raise InputError(f"num_class in {where} is {cfg.num_class}, more than the {MAX_CLASSES} "
+                         "label ids a scan can carry.")
     if cfg.scans < 0:
-        raise InputError(f"scans in {path} must be 0 (all) or a positive number; got {cfg.scans}.")
-    return cfg
+        raise InputError(f"scans in {where} must be 0 (all) or a positive number; got {cfg.scans}.")
+
+
+MAX_NEIGHBOURHOOD = 1 << 20  # most voxels one training point may reach (S-BKI kernel support)
+
+
+def check_method(cfg: BKIConfig, method: str) -> None:
+    """Refuse up front when one S-BKI training point would reach too many voxels (with the number).
+
+    A point reaches the voxels within ``R = floor(ell / resolution + 0.5)`` per axis, ``(2 R + 1)^3``
+    of them; the map's scratch arrays hold that many entries per point.
+    """
+    if method != "sbki":
+        return
+    side = 2 * math.floor(cfg.ell / cfg.resolution + 0.5) + 1
+    if side ** 3 > MAX_NEIGHBOURHOOD:
+        raise InputError(f"with ell {cfg.ell} m and resolution {cfg.resolution} m each training point "
+                         f"would reach {side ** 3:.3g} voxels ({side}^3), more than the limit of "
+                         f"{MAX_NEIGHBOURHOOD:,}: use a coarser resolution or a smaller ell.")
