@@ -234,6 +234,23 @@ class SemanticKITTISequence:
         either way raw SemanticKITTI ids).
     calib : str or Path, optional
         A file whose ``Tr:`` line replaces the folder's calibration (see :func:`sequence_calib`).
+    frame : {"velodyne", "reference"}
+        World frame: ``velodyne`` (default) is the velodyne frame of scan 0, ``inv(Tr) @ P_t @ Tr``;
+        ``reference`` is the reference C++ node's ``init_trans_to_ground @ P_t @ Tr``
+        (:func:`hw4.bki.reference.world_poses`).
+    unlabeled : {"drop", "insert"}
+        Hits whose raw id maps to class 0: dropped (default), or kept with class 0 as the reference
+        inserts them (free-space evidence at the hit; such scans carry label 0, which
+        :func:`~hw4.bki.scan.validate_scan` refuses, so they are mapped by
+        :func:`hw4.bki.semantic_eval.run`).
+    origin : {"true", "reference"}
+        Sensor origin of each scan: the velodyne position (default), or the camera translation the
+        reference passes (``frame="reference"`` only; :func:`hw4.bki.reference.sensor_origins`).
+    relabel : callable, optional
+        ``relabel(t, xyz, raw) -> classes``: replaces the classes of scan ``t`` (``xyz`` (N, 3) [m]
+        in the velodyne frame, ``raw`` (N,) uint32 raw labels; returns (N,) ints 0..19), e.g. a
+        simulated segmenter (:class:`hw4.bki.noise.SimulatedSegmenter`). Applied before
+        ``unlabeled``.
 
     Attributes
     ----------
@@ -241,7 +258,12 @@ class SemanticKITTISequence:
         Where the extrinsic came from (one sentence, for the command to print).
     """
 
-    def __init__(self, folder, labels: str = "labels", calib=None):
+    def __init__(self, folder, labels: str = "labels", calib=None, frame: str = "velodyne",
+                 unlabeled: str = "drop", origin: str = "true", relabel=None):
+        from . import reference
+        if unlabeled not in ("drop", "insert"):
+            raise InputError(f"unknown unlabeled option {unlabeled!r}; use drop or insert.")
+        self.frame, self.unlabeled, self.relabel = frame, unlabeled, relabel
         self.folder = Path(folder)
         if not self.folder.is_dir():
             raise InputError(f"{self.folder} is not a folder; give a SemanticKITTI sequence folder "
@@ -255,7 +277,9 @@ class SemanticKITTISequence:
             raise InputError(f"{self.label_dir} is missing: the scans need per-point labels "
                              "(labels/ or predictions/).")
         self.Tr, self.calib_note = sequence_calib(self.folder, calib)
-        self.poses = velodyne_poses(read_poses(self.folder / "poses.txt"), self.Tr)
+        cam = read_poses(self.folder / "poses.txt")
+        self.poses = reference.world_poses(cam, self.Tr, frame)
+        self.origins = reference.sensor_origins(cam, self.Tr, frame, origin)
         if len(self.poses) < len(self.bins):
             raise InputError(f"{self.folder / 'poses.txt'} has {len(self.poses)} poses for "
                              f"{len(self.bins)} scans; each scan needs a pose.")
@@ -269,7 +293,8 @@ class SemanticKITTISequence:
         Returns
         -------
         Scan
-            Points [m] and origin [m] in the world frame (velodyne frame of scan 0); labels 1..19.
+            Points [m] and origin [m] in the world frame (velodyne frame of scan 0 unless
+            ``frame`` says otherwise); labels 1..19 (0..19 with ``unlabeled="insert"``).
         """
         b = self.bins[t]
         lab_path = self.label_dir / (b.stem + ".label")
@@ -283,7 +308,12 @@ class SemanticKITTISequence:
         if i >= len(self.poses):
             raise InputError(f"{b.name} has no pose: {self.folder / 'poses.txt'} has {len(self.poses)} lines.")
         T = self.poses[i]
-        keep = cls > 0
+        if self.relabel is not None:
+            cls = np.asarray(self.relabel(i, pts[:, :3].astype(float), raw), dtype=np.int64)
+            if cls.shape != raw.shape or (cls.size and (cls.min() < 0 or cls.max() >= len(CLASS_NAMES))):
+                raise InputError(f"relabel gave {cls.shape} classes for the {len(raw)} points of "
+                                 f"{b.name}; it must give one class 0..{len(CLASS_NAMES) - 1} per point.")
+        keep = cls > 0 if self.unlabeled == "drop" else np.ones(len(cls), bool)
         xyz = pts[keep, :3].astype(float)
         world = xyz @ T[:3, :3].T + T[:3, 3]
-        return Scan(world, cls[keep], T[:3, 3].copy(), b.name)
+        return Scan(world, cls[keep], self.origins[i].copy(), b.name)
