@@ -24,6 +24,8 @@ from ..errors import InputError
 from .scan import Scan
 
 _OFF = np.int64(1 << 20)  # leaf index offset: keys are valid for |x| < 2^20 ds_resolution
+MAX_FREE_BYTES = 2 * 2**30  # refuse one scan's free samples beyond this working memory
+BYTES_PER_FREE_SAMPLE = 120  # positions, ray and step indices, leaf keys per free sample [bytes]
 
 
 @dataclass
@@ -118,6 +120,13 @@ def free_samples(hits: np.ndarray, origin: np.ndarray, free_resolution: float) -
         raise InputError(f"free_resolution must be positive; got {free_resolution}.")
     diff = hits - origin
     length = np.linalg.norm(diff, axis=1)
+    with np.errstate(over="ignore"):
+        total = float(np.sum(length / free_resolution)) + 2.0 * len(hits)  # refuse before allocating
+    if total * BYTES_PER_FREE_SAMPLE > MAX_FREE_BYTES:
+        raise InputError(f"free_resolution {free_resolution:g} m gives about {total:.3g} free samples "
+                         f"for the {len(hits):,} rays of one scan (longest {length.max():.3g} m), "
+                         f"about {total * BYTES_PER_FREE_SAMPLE / 2**30:.3g} GiB: use a larger "
+                         "free_resolution or a max_range.")
     with np.errstate(invalid="ignore", divide="ignore"):
         unit = np.where(length[:, None] > 0, diff / length[:, None], 0.0)
     # number of j >= 1 with j * fr < L (guarded against rounding of L / fr)
