@@ -58,8 +58,10 @@ ogm_continous_S_CSM.py   the same class under the name the course's run.py impor
 hw4core/                 the shared implementation the four files import
 
 Put the course's run.py, utils.py and data/ next to these files and run
-    python run.py --task_num N
-Requires Python >= 3.10 with numpy and scipy (tqdm only for progress bars).
+    python run.py --task_num N --plot
+Needs numpy and scipy (tqdm only for progress bars). Import-checked when packaged with
+Python {python}, numpy {numpy} and scipy {scipy}; the code uses only Python 3.8 syntax,
+so Python 3.8 to 3.10 should work too but was not tested.
 """
 
 
@@ -261,10 +263,17 @@ def find_pdf(pdf: str | Path | None = None) -> Path:
     """The book PDF: ``pdf`` when given, else the built book under ``_build/``."""
     if pdf is not None:
         path = Path(pdf)
+        if path.is_dir():
+            raise InputError(f"--pdf {path} is a folder, not a PDF file.")
         if not path.is_file():
             raise InputError(f"the PDF {path} does not exist: build the book with "
                              "`bash scripts/build_book.sh pdf` or give the path of your PDF.")
-        if path.read_bytes()[:5] != b"%PDF-":
+        try:
+            with open(path, "rb") as f:
+                head = f.read(5)
+        except OSError as e:
+            raise InputError(f"cannot read the PDF {path} ({e.strerror}).") from None
+        if head != b"%PDF-":
             raise InputError(f"{path} is not a PDF file.")
         return path
     for rel in PDF_CANDIDATES:
@@ -297,31 +306,48 @@ def build_package(uniqname: str, pdf: str | Path | None = None, out: str | Path 
     force : bool
         Overwrite an existing ``NAME_hw4.tgz`` / ``NAME_hw4.pdf``.
     """
+    from .atomic import Outputs
+
     name = validate_uniqname(uniqname)
     pdf_path = find_pdf(pdf)
     out = Path(out)
     tgz, pdf_out = out / f"{name}_hw4.tgz", out / f"{name}_hw4.pdf"
-    for path in (tgz, pdf_out):
-        if path.exists() and not force:
-            raise InputError(f"{path} already exists: pass --force to overwrite it.")
-    with tempfile.TemporaryDirectory() as tmp:
-        folder = Path(tmp) / f"{name}_hw4"
-        write_bundle(folder)
-        (folder / "README.txt").write_text(README.format(name=name))
-        check_bundle(folder)
-        for cache in folder.rglob("__pycache__"):
-            shutil.rmtree(cache)
-        buf = io.BytesIO()
-        with tarfile.open(fileobj=buf, mode="w:gz") as tar:
-            tar.add(folder, arcname=folder.name, filter=_reset, recursive=False)
-            for path in sorted(folder.rglob("*")):
-                tar.add(path, arcname=f"{folder.name}/{path.relative_to(folder).as_posix()}",
-                        filter=_reset, recursive=False)
-        out.mkdir(parents=True, exist_ok=True)
-        tgz.write_bytes(buf.getvalue())
-        if pdf_path.resolve() != pdf_out.resolve():
-            shutil.copyfile(pdf_path, pdf_out)
+    same_pdf = pdf_out.exists() and pdf_path.resolve() == pdf_out.resolve()
+    names = [tgz.name] + ([] if same_pdf else [pdf_out.name])
+    with Outputs(out, names, force=force) as o, tempfile.TemporaryDirectory() as tmp:
+        _write_package(name, pdf_path, Path(tmp), o, same_pdf)
     return tgz, pdf_out
+
+
+def _versions() -> dict:
+    import numpy
+    import scipy
+    return {"python": ".".join(map(str, sys.version_info[:3])), "numpy": numpy.__version__,
+            "scipy": scipy.__version__}
+
+
+def _write_package(name: str, pdf_path: Path, tmp: Path, o, same_pdf: bool) -> None:
+    """Bundle, check and write the two attachments through ``o`` (:class:`hw4.atomic.Outputs`)."""
+    folder = tmp / f"{name}_hw4"
+    write_bundle(folder)
+    (folder / "README.txt").write_text(README.format(name=name, **_versions()))
+    check_bundle(folder)
+    for cache in folder.rglob("__pycache__"):
+        shutil.rmtree(cache)
+    buf = io.BytesIO()
+    with tarfile.open(fileobj=buf, mode="w:gz") as tar:
+        tar.add(folder, arcname=folder.name, filter=_reset, recursive=False)
+        for path in sorted(folder.rglob("*")):
+            tar.add(path, arcname=f"{folder.name}/{path.relative_to(folder).as_posix()}",
+                    filter=_reset, recursive=False)
+    o[f"{name}_hw4.tgz"].write_bytes(buf.getvalue())
+    if not same_pdf:
+        try:
+            shutil.copyfile(pdf_path, o[f"{name}_hw4.pdf"])
+        except OSError as e:
+            if e.filename and Path(e.filename) == pdf_path:
+                raise InputError(f"cannot read the PDF {pdf_path} ({e.strerror}).") from None
+            raise
 
 
 # --------------------------------------------------------------------------- CLI
