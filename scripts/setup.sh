@@ -62,4 +62,44 @@ if [ -n "$missing" ]; then
         echo "  sudo apt-get update && sudo DEBIAN_FRONTEND=noninteractive apt-get install -y $TEX_PACKAGES"
     fi
 fi
+# The HTML book's MathJax, shipped with the build so that maths renders offline: MathJax 3 from
+# the npm registry into the git-ignored .vendor/ (npm is Debian's when missing and root), then the
+# parts the book uses (TeX input and its extensions, CommonHTML output and fonts, menu, a11y)
+# into .vendor/static/mathjax, which _config.yml adds to html_static_path.
+MATHJAX_VERSION=3.2.2
+mathjax=.vendor/static/mathjax
+if [ ! -f "$mathjax/tex-chtml.js" ] || [ "$(cat "$mathjax/VERSION" 2>/dev/null)" != "$MATHJAX_VERSION" ]; then
+    if ! command -v npm >/dev/null 2>&1 && [ "$(id -u)" = "0" ] && command -v apt-get >/dev/null 2>&1; then
+        echo "setup: installing npm (for MathJax)"
+        apt-get update -q
+        DEBIAN_FRONTEND=noninteractive apt-get install -y -q npm
+    fi
+    if command -v npm >/dev/null 2>&1; then
+        echo "setup: MathJax $MATHJAX_VERSION from npm into $mathjax"
+        npm install --silent --no-audit --no-fund --no-save --prefix .vendor/npm "mathjax@$MATHJAX_VERSION"
+        es5=.vendor/npm/node_modules/mathjax/es5
+        rm -rf "$mathjax.tmp" && mkdir -p "$mathjax.tmp"
+        cp -r "$es5/tex-chtml.js" "$es5/input" "$es5/output" "$es5/ui" "$es5/a11y" "$es5/sre" \
+              "$es5/adaptors" "$mathjax.tmp/"
+        rm -rf "$mathjax.tmp/output/svg" "$mathjax.tmp/output/svg.js" "$mathjax.tmp/input/mml"* \
+               "$mathjax.tmp/input/asciimath"*
+        echo "$MATHJAX_VERSION" > "$mathjax.tmp/VERSION"
+        rm -rf "$mathjax" && mv "$mathjax.tmp" "$mathjax"
+    else
+        echo "setup: the HTML book needs MathJax from npm; install npm (sudo apt-get install -y npm) and run this again." >&2
+    fi
+fi
+
+# The browser test (tests_browser/, run by test.sh after the book build): Debian's Chromium and
+# its WebDriver, installed when missing and run as root (selenium itself comes from PyPI).
+if ! command -v chromium >/dev/null 2>&1 || ! command -v chromedriver >/dev/null 2>&1; then
+    if [ "$(id -u)" = "0" ] && command -v apt-get >/dev/null 2>&1; then
+        echo "setup: installing Chromium and chromium-driver (browser test)"
+        apt-get update -q
+        DEBIAN_FRONTEND=noninteractive apt-get install -y -q chromium chromium-driver
+    else
+        echo "setup: the browser test needs Chromium; install it with:"
+        echo "  sudo apt-get update && sudo DEBIAN_FRONTEND=noninteractive apt-get install -y chromium chromium-driver"
+    fi
+fi
 echo "setup: ready ($(python --version), $(python -c 'import hw4; print("hw4", hw4.__version__)'))"

@@ -1,0 +1,145 @@
+"""Sphinx extension for this book: numbered video figures, offline MathJax, the author override.
+
+``video`` directive
+    A figure whose body is an MP4 player in the HTML and a still image in the PDF, numbered and
+    captioned like any ``figure`` (``{numref}`` works in both editions). In a notebook Markdown
+    cell::
+
+        ```{video} _static/t6_growth.mp4
+        :still: _static/t6_growth_strip.png
+        :name: fig-t6-growth
+        :width: 70%
+
+        The caption.
+        ```
+
+    ``:still:`` (the image the PDF prints and the HTML shows before the video plays) defaults to
+    the video's path with ``_strip.png``, else ``.png``, in place of its suffix. Every option of
+    ``figure`` (``name``, ``width``, ``align``, ``alt``, ``class``, ``figwidth``) applies. The HTML
+    player is ``<video controls loop muted playsinline preload="metadata">`` with a download link
+    as its fallback; the MP4 is copied into ``_downloads`` as ``{download}`` would.
+
+Offline MathJax
+    ``mathjax_path`` in ``_config.yml`` points into ``_static``; the files come from npm
+    (``scripts/setup.sh``). A missing copy stops the HTML build with one sentence instead of a
+    book whose maths silently never renders.
+
+``HW4_BOOK_AUTHOR``
+    When this environment variable is set (``python -m hw4 package --uniqname NAME`` sets it),
+    the PDF title page shows its value above the configured author line.
+"""
+from __future__ import annotations
+
+import os
+import posixpath
+import urllib.parse
+from pathlib import Path
+
+from docutils import nodes
+from docutils.parsers.rst import directives
+from sphinx.application import Sphinx
+from sphinx.directives.patches import Figure
+from sphinx.errors import ConfigError
+from sphinx.util import texescape
+from sphinx.util.docutils import SphinxDirective
+
+AUTHOR_ENV = "HW4_BOOK_AUTHOR"
+
+
+class video(nodes.General, nodes.Element):
+    """A video player; its single child is the still image (what non-HTML builders print)."""
+
+
+class VideoFigure(Figure, SphinxDirective):
+    """``figure`` with an MP4 player in the HTML and the still image elsewhere."""
+
+    option_spec = dict(Figure.option_spec, still=directives.unchanged)
+
+    def run(self) -> list[nodes.Node]:
+        video_rel = self.arguments[0]
+        rel, abspath = self.env.relfn2path(video_rel)
+        if not Path(abspath).is_file():
+            raise self.error(f"video file {video_rel!r} not found (looked for {abspath}).")
+        still = self.options.pop("still", None)
+        if still is None:
+            stem = posixpath.splitext(video_rel)[0]
+            for candidate in (f"{stem}_strip.png", f"{stem}.png"):
+                if Path(self.env.relfn2path(candidate)[1]).is_file():
+                    still = candidate
+                    break
+            else:
+                raise self.error(f"video {video_rel!r} needs a still image for the PDF: give "
+                                 f":still: or add {stem}_strip.png.")
+        self.arguments[0] = still
+        result = super().run()
+        figs = [n for n in result if isinstance(n, nodes.figure)]
+        if not figs:
+            return result  # an error message from figure
+        image = next(figs[0].findall(nodes.image))
+        self.env.note_dependency(rel)
+        player = video(src=self.env.dlfiles.add_file(self.env.docname, rel),
+                       width=image.get("width"), alt=image.get("alt", ""))
+        image.replace_self(player)
+        player += image
+        return result
+
+
+def visit_video_html(self, node: video) -> None:
+    image = node.children[0]
+    poster = image["uri"]
+    if poster in self.builder.images:
+        poster = posixpath.join(self.builder.imgpath, urllib.parse.quote(self.builder.images[poster]))
+    src = posixpath.join(self.builder.dlpath, urllib.parse.quote(node["src"]))
+    style = f' style="width: {node["width"]}"' if node.get("width") else ""
+    label = self.attval(node["alt"]) if node.get("alt") else "video"
+    self.body.append(
+        f'<video class="hw4-video" controls loop muted playsinline preload="metadata" '
+        f'poster="{poster}" aria-label="{label}"{style}>'
+        f'<source src="{src}" type="video/mp4">'
+        f'<a href="{src}">Download the video (MP4)</a></video>\n')
+    raise nodes.SkipNode
+
+
+def visit_video_other(self, node: video) -> None:
+    """Other builders (LaTeX, text, ...) print the still image, the node's only child."""
+
+
+def depart_video_other(self, node: video) -> None:
+    pass
+
+
+def check_mathjax(app: Sphinx) -> None:
+    """Stop an HTML build whose MathJax copy (scripts/setup.sh) is missing."""
+    if app.builder.format != "html":
+        return
+    path = app.config.mathjax_path
+    if "://" in path or path.startswith("//"):
+        raise ConfigError(f"mathjax_path {path!r} loads MathJax from the network; the book must "
+                          "work offline (see _config.yml).")
+    for static in app.config.html_static_path:
+        if (Path(app.confdir) / static / path).is_file():
+            return
+    raise ConfigError(f"MathJax ({path}) is not in html_static_path: run `bash scripts/setup.sh`, "
+                      "which copies it there from npm.")
+
+
+def override_author(app: Sphinx, config) -> None:
+    """Put ``$HW4_BOOK_AUTHOR`` on the PDF's title page, above the configured author line."""
+    name = os.environ.get(AUTHOR_ENV, "").strip()
+    if not name:
+        return
+    escaped = texescape.escape(name, config.latex_engine)
+    config.latex_documents = [(doc, target, title, f"{escaped}\\\\{author}" if author else escaped,
+                               *rest) for doc, target, title, author, *rest in config.latex_documents]
+
+
+def setup(app: Sphinx) -> dict:
+    app.add_node(video, html=(visit_video_html, None),
+                 latex=(visit_video_other, depart_video_other),
+                 text=(visit_video_other, depart_video_other),
+                 man=(visit_video_other, depart_video_other),
+                 texinfo=(visit_video_other, depart_video_other))
+    app.add_directive("video", VideoFigure)
+    app.connect("builder-inited", check_mathjax)
+    app.connect("config-inited", override_author)
+    return {"version": "1.0", "parallel_read_safe": True, "parallel_write_safe": True}
