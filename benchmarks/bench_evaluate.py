@@ -12,7 +12,7 @@ from __future__ import annotations
 import argparse
 import time
 
-from hw4 import evaluate as ev
+from hw4 import book, evaluate as ev
 from hw4.tasks import load_task_data
 
 TARGET_SECONDS = 60.0
@@ -37,7 +37,7 @@ def main(argv=None) -> int:
         t0 = time.perf_counter()
         rows = ev.evaluate_all(baseline=not args.no_baseline, split=split)
         best = min(best, time.perf_counter() - t0)
-    print(ev.markdown_table(rows, columns=("model", "grid_size", "auc", "coverage", "accuracy",
+    print(book.markdown_table(rows, columns=("model", "grid_size", "auc", "coverage", "accuracy",
                                            "miou", "build_seconds")))
     n12 = sum(r["task"] > 0 for r in rows)
     verdict = "OK" if best <= TARGET_SECONDS else "SLOWER THAN TARGET"

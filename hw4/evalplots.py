@@ -38,33 +38,39 @@ def plot_roc(rows, ax=None, title=None, legend=True, zoom: float | None = None,
     for r in rows:
         ls = (("--" if r["task"] in (3, 4) else "-") if style_by == "semantic"
               else GRID_STYLES.get(round(r["grid_size"], 3), "-"))
+        label = (r["model"] if style_by == "semantic"
+                 else f"{r['model']}, {r['grid_size']:g} m (AUC {r['auc']:.3f})")
         ax.plot(r["fpr"], r["tpr"], ls,
-                color=MODEL_COLORS.get(r["task"], "k"), lw=1.2,
-                label=f"{r['model']}, {r['grid_size']:g} m (AUC {r['auc']:.3f})")
+                color=MODEL_COLORS.get(r["task"], "k"), lw=1.2, label=label)
     ax.plot([0, 1], [0, 1], color="0.8", lw=0.8, zorder=0)
-    ax.set_xlabel("false positive rate (free samples called occupied)")
-    ax.set_ylabel("true positive rate (end points called occupied)")
+    ax.set_xlabel("false positive rate")
+    ax.set_ylabel("true positive rate")
     ax.set_xlim(0, zoom if zoom else 1)
     ax.set_ylim(0, 1.0)
     if title:
         ax.set_title(title)
     if legend:
-        ax.legend(fontsize=7, loc="lower right", framealpha=0.9)
+        ax.legend(fontsize=8, loc="lower right", framealpha=0.9)
     return ax
 
 
-def roc_figure(rows, grid_sizes=None, zoom: float | None = 0.2):
+def roc_figure(rows, grid_sizes=None, zoom: float | None = 0.2, width: float = 7.0):
     """One ROC panel per grid size, every model of ``rows`` in each; returns the figure.
 
-    Colour per model (:data:`MODEL_COLORS`), semantic maps dashed.
+    Colour per model (:data:`MODEL_COLORS`), semantic maps dashed; one legend for the figure,
+    below the panels (the AUCs are in the chapters' tables). ``width`` [in] is the print width,
+    so that the 9 pt text stays at least 8 pt on the page.
     """
     sizes = sorted({r["grid_size"] for r in rows}) if grid_sizes is None else list(grid_sizes)
-    fig, axes = plt.subplots(1, len(sizes), figsize=(4.2 * len(sizes), 4.0), sharey=True,
-                             constrained_layout=True)
+    fig, axes = plt.subplots(1, len(sizes), figsize=(width, 2.9), sharey=True,
+                             layout="constrained")
     for ax, g in zip(np.atleast_1d(axes), sizes):
         plot_roc([r for r in rows if np.isclose(r["grid_size"], g)], ax=ax, zoom=zoom,
-                 title=f"grid {g:g} m", style_by="semantic")
+                 title=f"grid {g:g} m", style_by="semantic", legend=False)
         ax.label_outer()
+    handles, labels = np.atleast_1d(axes)[0].get_legend_handles_labels()
+    fig.legend(handles, labels, loc="outside lower center", ncol=min(len(labels), 5),
+               fontsize=9, frameon=False)
     return fig
 
 
@@ -83,7 +89,7 @@ def plot_confusion(cm, ax=None, title=None, normalize: bool = True, colorbar: bo
         for j in range(len(cm)):
             v = show[i, j]
             txt = f"{100 * v:.0f}" if normalize else f"{int(cm[i, j])}"
-            ax.text(j, i, txt, ha="center", va="center", fontsize=9,
+            ax.text(j, i, txt, ha="center", va="center", fontsize=8,
                     color="white" if (normalize and v > 0.5) else "black")
     ax.set_xticks(range(len(cm)), names, rotation=45, ha="right")
     ax.set_yticks(range(len(cm)), names)
@@ -108,5 +114,5 @@ def plot_study(rows, x: str, y: str, by: str, ax=None, label_fmt="{by} = {v:g}",
     ax.set_ylabel(ylabel or y)
     if title:
         ax.set_title(title)
-    ax.legend(fontsize=8)
+    ax.legend(fontsize=9)
     return ax

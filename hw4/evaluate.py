@@ -362,13 +362,21 @@ def score_map(m, samples: HeldOut, keep_roc: bool = True) -> dict:
     return out
 
 
-def bootstrap_auc(maps, samples: HeldOut, n_boot: int = 200, seed: int = 0) -> dict:
-    """AUCs of several maps under resampling of the held-out *scans* (paired, seeded).
+BOOT_METRICS = ("auc", "occupied_recall", "accuracy", "miou")
+
+
+def bootstrap_scores(maps, samples: HeldOut, n_boot: int = 200, seed: int = 0) -> dict:
+    """Scores of several maps under resampling of the held-out *scans* (paired, seeded).
 
     Samples from one scan are strongly correlated, so the unit of resampling is the scan: each
     replicate draws the held-out scans with replacement and weights every sample by how often
-    its scan was drawn. All maps are scored on the samples that every one of them observes, so
-    their differences are paired.
+    its scan was drawn. All maps are scored on the samples that every one of them observes, with
+    the same draws, so differences between maps are paired.
+
+    Metrics (:data:`BOOT_METRICS`): ``auc`` (occupancy, :func:`occupancy_score`), and on the
+    end points ``occupied_recall`` (called occupied: P > 0.5 for binary maps, any region for
+    semantic maps), ``accuracy`` and ``miou`` (semantic maps only; NaN for the others) as in
+    :func:`score_map`.
 
     Parameters
     ----------
@@ -381,9 +389,9 @@ def bootstrap_auc(maps, samples: HeldOut, n_boot: int = 200, seed: int = 0) -> d
 
     Returns
     -------
-    dict with ``auc`` (n_maps,) on the common samples, ``replicates`` (n_boot, n_maps; NaN for
-    a replicate without positives or negatives) and
-    ``n_common`` (samples scored by every map).
+    dict with, per metric, the estimate on the common samples (n_maps,) under the metric's name
+    and its replicates (n_boot, n_maps) under ``"<metric>_replicates"``; ``replicates`` is an
+    alias of ``auc_replicates``; ``n_common`` (samples scored by every map).
     """
     cells = [m.grid.nearest_cell(samples.points) for m in maps]
     common = np.ones(len(samples.points), dtype=bool)
@@ -393,30 +401,84 @@ def bootstrap_auc(maps, samples: HeldOut, n_boot: int = 200, seed: int = 0) -> d
         common &= ok
     positive = samples.occupied[common]
     scans, scan_idx = np.unique(samples.scan[common], return_inverse=True)
+    k = N_LABELS + 1
     prepared = []
     for m, c in zip(maps, cells):
         s = occupancy_score(m)[c[common]]
         order = np.argsort(-s, kind="stable")
         ss = s[order]
         start = np.flatnonzero(np.r_[True, ss[1:] != ss[:-1]])
-        prepared.append((order, start))
-    rng = np.random.default_rng(seed)
+        if getattr(m, "semantic", False):
+            pred = most_likely_class(np.asarray(m.map["alpha"]))[c[common]]
+            called = pred != N_LABELS
+            codes = samples.truth_class[common] * k + pred
+        else:
+            thr = 0.0 if getattr(m, "logodds", None) is not None else 0.5
+            called, codes = s > thr, None
+        prepared.append((order, start, called, codes))
 
-    def weighted(order, start, w):
+    def weighted(prep, w):
+        order, start, called, codes = prep
         wp = np.add.reduceat((w * positive)[order], start)
         wn = np.add.reduceat((w * ~positive)[order], start)
         above = np.cumsum(wn) - wn
         den = wp.sum() * wn.sum()
-        return 1.0 - float(np.sum(wp * (above + wn / 2))) / den if den > 0 else np.nan
+        out = [1.0 - float(np.sum(wp * (above + wn / 2))) / den if den > 0 else np.nan]
+        wpos = (w * positive).sum()
+        out.append(float((w * (called & positive)).sum() / wpos) if wpos > 0 else np.nan)
+        if codes is None:
+            return out + [np.nan, np.nan]
+        cm = np.bincount(codes, weights=w, minlength=k * k).reshape(k, k)
+        ends = cm[:N_LABELS]
+        out.append(float(np.trace(ends[:, :N_LABELS]) / ends.sum()) if ends.sum() > 0 else np.nan)
+        iou = iou_from_confusion(ends_only(cm), np.arange(N_LABELS))
+        out.append(float(np.nanmean(iou)) if np.isfinite(iou).any() else np.nan)
+        return out
 
+    rng = np.random.default_rng(seed)
     one = np.ones(len(positive))
-    base = np.array([weighted(o, s, one) for o, s in prepared])
-    reps = np.empty((n_boot, len(maps)))
+    base = np.array([weighted(p, one) for p in prepared])          # (n_maps, n_metrics)
+    reps = np.empty((n_boot, len(maps), len(BOOT_METRICS)))
     for b in range(n_boot):
         draw = np.bincount(rng.integers(0, len(scans), len(scans)), minlength=len(scans))
         w = draw[scan_idx].astype(float)
-        reps[b] = [weighted(o, s, w) for o, s in prepared]
-    return {"auc": base, "replicates": reps, "n_common": int(common.sum())}
+        reps[b] = [weighted(p, w) for p in prepared]
+    out = {"n_common": int(common.sum()), "n_boot": int(n_boot), "seed": int(seed)}
+    for i, name in enumerate(BOOT_METRICS):
+        out[name] = base[:, i]
+        out[f"{name}_replicates"] = reps[:, :, i]
+    out["replicates"] = out["auc_replicates"]
+    return out
+
+
+def bootstrap_auc(maps, samples: HeldOut, n_boot: int = 200, seed: int = 0) -> dict:
+    """AUCs of several maps under paired resampling of held-out scans (see :func:`bootstrap_scores`).
+
+    Returns a dict with ``auc`` (n_maps,) on the common samples, ``replicates`` (n_boot, n_maps)
+    and ``n_common``.
+    """
+    b = bootstrap_scores(maps, samples, n_boot, seed)
+    return {"auc": b["auc"], "replicates": b["auc_replicates"], "n_common": b["n_common"]}
+
+
+def paired_difference(boot: dict, a: int, b: int, metric: str = "auc",
+                      level: float = 0.95) -> dict:
+    """Difference ``metric[a] - metric[b]`` of two maps of :func:`bootstrap_scores`, with its
+    percentile interval over the paired replicates.
+
+    Returns a dict ``diff``, ``lo``, ``hi`` and ``p_le0`` (share of replicates with a
+    difference <= 0: how often the resampled data do not favour map ``a``).
+    """
+    if not 0 < level < 1:
+        raise InputError(f"level must lie strictly between 0 and 1; got {level!r}.")
+    d = boot[f"{metric}_replicates"][:, a] - boot[f"{metric}_replicates"][:, b]
+    d = d[np.isfinite(d)]
+    if d.size == 0:
+        raise InputError(f"no finite bootstrap replicates of {metric!r} for maps {a} and {b}.")
+    q = (1 - level) / 2
+    lo, hi = np.quantile(d, [q, 1 - q])
+    return {"diff": float(boot[metric][a] - boot[metric][b]), "lo": float(lo), "hi": float(hi),
+            "p_le0": float(np.mean(d <= 0))}
 
 
 def ends_only(cm) -> np.ndarray:
@@ -470,19 +532,55 @@ def mapping_data(task: int, split: Split) -> _data.IntelData:
     return subset(load_task_data(task), split.mapping)
 
 
-def build_eval_map(task: int, grid_size: float, split: Split | None = None, **kw):
-    """Build the map of task 1..4, or the log-odds baseline (``task=0``), from the mapping scans."""
+_tuned_cache: dict = {}
+
+
+def tuned_logodds(grid_size: float, split: Split | None = None, **kw) -> tuple:
+    """The log-odds baseline's increments and clamp, tuned on validation scans of the mapping set.
+
+    :func:`hw4.logodds.tune_logodds` on the mapping scans of ``split`` (one in ten of them set
+    aside for validation; the held-out test scans are never used), maximising the AUC of
+    :func:`score_map` on the validation scans' samples (same step and margin as the split).
+    Cached per process. Returns ``(best, rows)`` as :func:`~hw4.logodds.tune_logodds` does.
+    """
+    from .logodds import tune_logodds
+    split = split or intel_split()
+    key = (float(grid_size), split.every, tuple(split.held_out[:3]), split.samples.step,
+           split.samples.margin, tuple(sorted(kw.items())))
+    if key not in _tuned_cache:
+        step, margin = split.samples.step, split.samples.margin
+
+        samples = {}
+
+        def score(m, val):
+            if id(val) not in samples:   # one validation set per tuning: its samples once
+                samples[id(val)] = held_out_samples(val, np.arange(len(val.scans)), step, margin)
+            return score_map(m, samples[id(val)], keep_roc=False)["auc"]
+
+        _tuned_cache[key] = tune_logodds(grid_size, mapping_data(1, split), score, **kw)
+    return _tuned_cache[key]
+
+
+def build_eval_map(task: int, grid_size: float, split: Split | None = None, tuned: bool = True,
+                   **kw):
+    """Build the map of task 1..4, or the log-odds baseline (``task=0``), from the mapping scans.
+
+    The baseline uses the increments and clamp of :func:`tuned_logodds` unless ``tuned=False``
+    (then the course example's 3, -3 and no clamp, or those given in ``kw``).
+    """
     from .tasks import build_map
     split = split or intel_split()
     if task == 0:
         from .logodds import build_logodds
+        if tuned:
+            kw = {**tuned_logodds(grid_size, split, **kw)[0], **kw}
         return build_logodds(grid_size, mapping_data(1, split), **kw)
     return build_map(task, grid_size, data=mapping_data(task, split), **kw)
 
 
 def evaluate_all(grid_sizes=GRID_SIZES, tasks=(1, 2, 3, 4), baseline: bool = True,
                  split: Split | None = None, keep_roc: bool = True, progress: bool = False,
-                 **model_kw) -> list:
+                 maps: dict | None = None, **model_kw) -> list:
     """Evaluate every model at every grid size (plus the log-odds baseline) on held-out scans.
 
     Parameters
@@ -500,6 +598,9 @@ def evaluate_all(grid_sizes=GRID_SIZES, tasks=(1, 2, 3, 4), baseline: bool = Tru
         Keep each row's ROC curve (``fpr``, ``tpr`` arrays) for plotting.
     progress : bool
         Print one line per map.
+    maps : dict, optional
+        Receives every built map, keyed by ``(task, grid_size)`` (for bootstrap intervals and
+        re-scoring without rebuilding).
     **model_kw
         Passed to every model (e.g. ``nearest_poses=None``); continuous-only keywords (``l``,
         ``sigma``, ``beams``, ``sample_step``) go to tasks 2 and 4 only.
@@ -512,7 +613,7 @@ def evaluate_all(grid_sizes=GRID_SIZES, tasks=(1, 2, 3, 4), baseline: bool = Tru
     :func:`score_map` (``fpr``, ``tpr`` when ``keep_roc``; ``iou`` (6,) and ``confusion`` (7, 7)
     for the semantic maps; ``n_samples``, ``coverage_occupied``, ``coverage_free``).
     ``model`` is the display name (:data:`MODEL_NAMES`). Use :func:`as_array` for a structured
-    array, :func:`glue_rows` / :func:`myst_table` for the book, :func:`markdown_table` to print.
+    array; the book's table writers are in :mod:`hw4.book`.
     """
     split = split or intel_split()
     cont_only = {"l", "sigma", "beams", "sample_step"}
@@ -523,6 +624,8 @@ def evaluate_all(grid_sizes=GRID_SIZES, tasks=(1, 2, 3, 4), baseline: bool = Tru
             t0 = time.perf_counter()
             m = build_eval_map(task, g, split, **kw)
             build = time.perf_counter() - t0
+            if maps is not None:
+                maps[(task, float(g))] = m
             row = {"model": MODEL_NAMES[task], "task": task, "grid_size": float(g),
                    "accuracy": np.nan, "miou": np.nan, "free_accuracy": np.nan,
                    "label_accuracy": np.nan, "occupied_recall": np.nan,
@@ -546,89 +649,3 @@ def select(rows, **where) -> list:
     """Rows whose keys equal the given values, e.g. ``select(rows, task=2, grid_size=0.27)``."""
     return [r for r in rows if all(np.isclose(r[k], v) if isinstance(v, float) else r[k] == v
                                    for k, v in where.items())]
-
-
-def glue_key(row: dict, metric: str, prefix: str = "") -> str:
-    """A glue name for one number of a row, e.g. ``auc_t2_g0135`` (task 0 is the baseline)."""
-    return f"{prefix}{metric}_t{row['task']}_g{str(row['grid_size']).replace('.', '')}"
-
-
-GLUE_METRICS = ("auc", "coverage", "unobserved", "occupied_recall", "free_accuracy", "accuracy",
-                "miou", "label_accuracy")
-
-
-def glue_rows(rows, glue, metrics=GLUE_METRICS, prefix: str = "", digits: int = 5) -> list:
-    """Glue every finite metric of every row under :func:`glue_key` names; return the names.
-
-    ``glue`` is ``myst_nb.glue`` (passed in, so the package does not depend on myst-nb). Values are
-    rounded to ``digits`` decimals so that the stored text does not hinge on the last bit.
-    """
-    names = []
-    for r in rows:
-        for m in metrics:
-            v = r.get(m, np.nan)
-            if np.isfinite(v):
-                name = glue_key(r, m, prefix)
-                glue(name, round(float(v), digits), display=False)
-                names.append(name)
-    return names
-
-
-def myst_table(rows, columns=("model", "grid_size", "auc", "coverage", "occupied_recall",
-                              "free_accuracy", "accuracy", "miou"), fmt: str = ".3f",
-               prefix: str = "") -> str:
-    """MyST source of a pipe table whose numbers are ``{glue:text}`` references (see :func:`glue_rows`).
-
-    Paste it into a *markdown* cell (after gluing the rows with the same ``prefix``): it renders
-    in HTML and PDF alike, and every number in it comes from the code. Missing values show a dash.
-    """
-    heads = _HEADS
-    lines = ["| " + " | ".join(heads.get(c, c) for c in columns) + " |",
-             "|" + "|".join(":--" if c == "model" else "--:" for c in columns) + "|"]
-    for r in rows:
-        cells = []
-        for c in columns:
-            v = r[c]
-            if c == "model":
-                cells.append(str(v))
-            elif c == "grid_size":
-                cells.append(f"{v:g}")
-            elif isinstance(v, (float, np.floating)) and not np.isfinite(v):
-                cells.append("–")
-            else:
-                cells.append(f"{{glue:text}}`{glue_key(r, c, prefix)}:{fmt}`")
-        lines.append("| " + " | ".join(cells) + " |")
-    return "\n".join(lines)
-
-
-_HEADS = {"model": "model", "task": "task", "grid_size": "grid [m]", "auc": "AUC",
-          "coverage": "coverage", "unobserved": "unobserved", "accuracy": "accuracy",
-          "miou": "mIoU", "free_accuracy": "free acc.", "n_scored": "scored samples",
-          "build_seconds": "build [s]", "label_accuracy": "label acc.",
-          "occupied_recall": "occ. recall", "occupied_kept": "hits kept",
-          "free_kept": "free evidence kept"}
-
-
-def markdown_table(rows, columns=("model", "grid_size", "auc", "coverage", "occupied_recall",
-                                  "free_accuracy", "accuracy", "miou"), digits: int = 3) -> str:
-    """A Markdown table of the rows with the numbers written out (NaN shown as a dash).
-
-    For printing and for notebooks. Note: myst-nb renders a ``text/markdown`` *output* as
-    CommonMark, which has no tables, unless the book sets ``nb_render_markdown_format: myst``;
-    for the book, prefer :func:`myst_table` in a markdown cell.
-    """
-    heads = _HEADS
-
-    def fmt(c, v):
-        if isinstance(v, str):
-            return v
-        if c == "grid_size":
-            return f"{v:g}"
-        if c in ("task", "n_scored"):
-            return f"{int(v):,}"
-        return "–" if not np.isfinite(v) else f"{v:.{digits}f}"
-
-    lines = ["| " + " | ".join(heads.get(c, c) for c in columns) + " |",
-             "|" + "|".join(":--" if c == "model" else "--:" for c in columns) + "|"]
-    lines += ["| " + " | ".join(fmt(c, r[c]) for c in columns) + " |" for r in rows]
-    return "\n".join(lines)

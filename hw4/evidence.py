@@ -84,7 +84,8 @@ def count_evidence(grid: Grid, poses, scans, *, model: str = "discrete", semanti
                    nearest_poses: int | None = 16, beams: str = "nearest", z_max: float = Z_MAX,
                    w_obstacle: float | None = None, w_beam: float = 2 * np.pi / N_BEAMS,
                    sigma0: float = SIGMA0, l: float = LENGTH, sample_step: float = SAMPLE_STEP,
-                   num_labels: int = 6, progress: bool = False) -> np.ndarray:
+                   num_labels: int = 6, progress: bool = False,
+                   free_samples: str = "all") -> np.ndarray:
     """Evidence (pseudo-counts, prior excluded) of every grid cell.
 
     Parameters
@@ -119,6 +120,9 @@ def count_evidence(grid: Grid, poses, scans, *, model: str = "discrete", semanti
         Semantic labels 1..num_labels.
     progress : bool
         Show a tqdm progress bar.
+    free_samples : {'all', 'closest'}
+        Continuous models with ``beams='nearest'``: every free sample within ``l`` of the cell
+        counts (Algorithm 2 as written), or only the sample closest to the cell.
 
     Returns
     -------
@@ -134,6 +138,9 @@ def count_evidence(grid: Grid, poses, scans, *, model: str = "discrete", semanti
                                       or not isinstance(nearest_poses, (int, np.integer))
                                       or nearest_poses < 1):
         raise InputError(f"nearest_poses must be a positive integer or None; got {nearest_poses!r}.")
+    if free_samples not in ("all", "closest") or (free_samples == "closest" and beams == "all"):
+        raise InputError(f"free_samples must be 'all' or 'closest' (the latter with beams='nearest'); "
+                         f"got {free_samples!r}.")
     if w_obstacle is None:
         w_obstacle = 2 * grid.grid_size
     for v, name in ((z_max, "z_max"), (w_obstacle, "w_obstacle"), (w_beam, "w_beam"),
@@ -185,7 +192,7 @@ def count_evidence(grid: Grid, poses, scans, *, model: str = "discrete", semanti
                              r - zk)
             near = gap < l + 1e-9
             _continuous_nearest(grid, poses, table, cls_hit, free, add, cell[near], pose[near],
-                                k[near], sigma0, l, sample_step)
+                                k[near], sigma0, l, sample_step, free_samples == "closest")
     return acc.reshape(grid.n_cells, n_classes)
 
 
@@ -227,8 +234,10 @@ def n_samples(z, step):
     return np.where(n * step < z, n + 1, n)
 
 
-def _continuous_nearest(grid, poses, table, cls_hit, free, add, cell, pose, k, sigma0, l, step):
-    """Algorithm 2 for (cell, pose) pairs whose nearest beam is ``k``."""
+def _continuous_nearest(grid, poses, table, cls_hit, free, add, cell, pose, k, sigma0, l, step,
+                        closest=False):
+    """Algorithm 2 for (cell, pose) pairs whose nearest beam is ``k`` (``closest``: only the free
+    sample nearest to the cell counts)."""
     cells = grid.cells[cell]
     p = poses[pose]
     zk = table.ranges[k]
@@ -244,6 +253,13 @@ def _continuous_nearest(grid, poses, table, cls_hit, free, add, cell, pose, k, s
     e = dx * s - dy * c
     m = (np.abs(e) < l) & (t > -l) & (t < zk + l)
     cell, p, zk, c, s, t, cells = cell[m], p[m], zk[m], c[m], s[m], t[m], cells[m]
+    if closest:  # samples lie on the beam's line: the nearest is the one nearest in t
+        j = np.clip(np.rint(t / step).astype(np.int64), 0, n_samples(zk, step) - 1)
+        d2 = np.sqrt((cells[:, 0] - (p[:, 0] + j * step * c)) ** 2
+                     + (cells[:, 1] - (p[:, 1] + j * step * s)) ** 2)
+        near = d2 < l
+        add(cell[near], np.full(near.sum(), free), sparse_kernel(d2[near], sigma0, l))
+        return
     j_lo = np.maximum(np.floor((t - l) / step).astype(np.int64), 0)
     j_hi = np.minimum(np.ceil((t + l) / step).astype(np.int64), n_samples(zk, step) - 1)
     for o in range(int(np.ceil(2 * l / step)) + 2):

@@ -149,3 +149,38 @@ def strip_figure(kept: dict, poses, ncols: int = 3):
         ax.axis("off")
     plotting.class_legend(axes[0], loc="upper left")
     return fig
+
+
+def label_changes(kept: dict) -> list:
+    """How the most likely class of cells changes between kept frames of the growing map.
+
+    Parameters
+    ----------
+    kept : dict ``n_scans -> (grid, counts)`` as :func:`render_frames` returns it (semantic
+        counts, free space last).
+
+    Returns
+    -------
+    list of dict, one per pair of consecutive kept frames (``n_from``, ``n_to``):
+    ``region_both`` (cells with a region class in both frames), ``swapped`` (their share whose
+    region changed), ``to_free`` (share of the earlier frame's region cells now most likely free),
+    ``mixed_swapped`` (share of the swapped cells whose region evidence, at the later frame, comes
+    from more than one label: the label noise behind the colour change).
+    """
+    steps = sorted(kept)
+    out = []
+    for a, b in zip(steps[:-1], steps[1:]):
+        (_, ca), (_, cb) = kept[a], kept[b]
+        free = ca.shape[1] - 1
+        la = np.where(ca.sum(axis=1) > 0, np.argmax(ca, axis=1), -1)
+        lb = np.where(cb.sum(axis=1) > 0, np.argmax(cb, axis=1), -1)
+        ra = (la >= 0) & (la != free)
+        rb = (lb >= 0) & (lb != free)
+        both = ra & rb
+        swapped = both & (la != lb)
+        mixed = (cb[:, :free] > 0).sum(axis=1) > 1
+        out.append({"n_from": int(a), "n_to": int(b), "region_both": int(both.sum()),
+                    "swapped": float(swapped.sum() / max(both.sum(), 1)),
+                    "to_free": float((ra & (lb == free)).sum() / max(ra.sum(), 1)),
+                    "mixed_swapped": float((swapped & mixed).sum() / max(swapped.sum(), 1))})
+    return out

@@ -15,7 +15,8 @@ from matplotlib.patches import Patch
 
 CLASS_NAMES = ["north rooms", "west rooms", "east rooms", "south rooms", "middle rooms", "hallways"]
 CLASS_COLORS = np.array([[0.0, 0.447, 0.741], [0.850, 0.325, 0.098], [0.929, 0.694, 0.125],
-                         [0.494, 0.184, 0.556], [0.466, 0.674, 0.188], [0.301, 0.745, 0.933]])
+                         [0.494, 0.184, 0.556], [0.466, 0.674, 0.188], [0.800, 0.475, 0.655]])
+# hallways reddish purple (Okabe-Ito #CC79A7), not a second blue next to the north rooms
 FREE_COLOR = np.array([1.0, 1.0, 1.0])
 UNKNOWN_COLOR = np.array([0.5, 0.5, 0.5])
 VARIANCE_CMAP = "viridis"
@@ -63,12 +64,18 @@ def plot_mean(ogm, ax=None, title=None, colorbar=True):
     return im
 
 
-def plot_variance(ogm, ax=None, title=None, vmax=None, colorbar=True):
-    """Posterior variance per cell (Beta variance, or that of the most likely class)."""
+def plot_variance(ogm, ax=None, title=None, vmax=None, colorbar=True, log=False, vmin=1e-4):
+    """Posterior variance per cell (Beta variance, or that of the most likely class).
+
+    ``log``: a logarithmic colour scale from ``vmin`` to ``vmax`` (values below ``vmin`` drawn
+    at ``vmin``), so that the differences among observed cells show next to the prior's value.
+    """
     ax = _new(ax)
     var = ogm.grid.to_image(ogm.map["variance"])
-    im = ax.imshow(var, origin="lower", extent=_extent(ogm.grid), cmap=VARIANCE_CMAP,
-                   vmin=0, vmax=vmax if vmax is not None else float(var.max()))
+    top = vmax if vmax is not None else float(var.max())
+    scale = (dict(norm=mpl.colors.LogNorm(vmin, top, clip=True)) if log
+             else dict(vmin=0, vmax=top))
+    im = ax.imshow(var, origin="lower", extent=_extent(ogm.grid), cmap=VARIANCE_CMAP, **scale)
     _axes(ax, ogm.grid, title)
     if colorbar:
         ax.figure.colorbar(im, ax=ax, shrink=0.8, label="variance")
@@ -92,7 +99,7 @@ def class_legend(ax, num_classes=6, loc="upper left", **kw):
     handles = [Patch(color=CLASS_COLORS[i], label=CLASS_NAMES[i]) for i in range(num_classes)]
     handles += [Patch(facecolor=FREE_COLOR, edgecolor="0.6", label="free"),
                 Patch(color=UNKNOWN_COLOR, label="unknown")]
-    return ax.legend(handles=handles, loc=loc, fontsize=8, framealpha=0.9, **kw)
+    return ax.legend(handles=handles, loc=loc, framealpha=0.9, **kw)
 
 
 def plot_semantic(ogm, ax=None, title=None, legend=True):

@@ -11,6 +11,7 @@ from types import SimpleNamespace
 import numpy as np
 
 from . import evaluate as ev
+from .evidence import count_evidence
 from .grid import Grid
 from .kernel import SIGMA0
 from .posterior import beta_mean_variance, dirichlet_mean_variance
@@ -126,3 +127,93 @@ def options_study(grid_size: float = 0.27, tasks=(1, 2, 4), options=OPTIONS,
         rows += mine
     return rows
 
+
+
+MARGINS = (0.1, 0.25, 0.5)  # free-sample margins before the held-out end point [m]
+
+
+def margin_study(maps: dict, margins=MARGINS, split: ev.Split | None = None) -> list:
+    """Held-out scores of already built maps for several end-point margins of the free samples.
+
+    The held-out free samples stop ``margin`` short of each end point (default 0.25 m). Closer to
+    the end point they fall in or next to the wall's cell and every map calls some of them
+    occupied; farther away they test only open space. Only the samples change: the maps (built
+    from the mapping scans of ``split``) are scored as they are.
+
+    Parameters
+    ----------
+    maps : dict ``(task, grid_size) -> built map``, e.g. from :func:`hw4.evaluate.evaluate_all`'s
+        ``maps`` argument.
+    margins : sequence of float [m]
+
+    Returns
+    -------
+    list of dict: ``task``, ``model``, ``grid_size``, ``margin`` and the scores of
+    :func:`hw4.evaluate.score_map` (without ROC curves).
+    """
+    split = split or ev.intel_split()
+    rows = []
+    for margin in margins:
+        samples = ev.intel_split(split.every, None, split.samples.step, margin).samples
+        for (task, g), m in maps.items():
+            row = {"task": task, "model": ev.MODEL_NAMES[task], "grid_size": float(g),
+                   "margin": float(margin), "accuracy": np.nan, "miou": np.nan}
+            row.update(ev.score_map(m, samples, keep_roc=False))
+            rows.append(row)
+    return rows
+
+
+FREE_VARIANTS = (  # (key, label, count_evidence keywords, free-evidence factor)
+    ("package", "every sample within l, step 0.1 m", {}, 1.0),
+    ("closest", "closest sample only", {"free_samples": "closest"}, 1.0),
+    ("step_grid", "step = grid size", {"sample_step": None}, 1.0),
+    ("free_half", "free weight x 0.5", {}, 0.5),
+    ("free_quarter", "free weight x 0.25", {}, 0.25),
+    ("free_tenth", "free weight x 0.1", {}, 0.1),
+)
+
+
+def free_sample_study(grid_size: float = 0.135, task: int = 4, variants=FREE_VARIANTS,
+                      split: ev.Split | None = None, n_boot: int = 0, seed: int = 0) -> tuple:
+    """Held-out scores of a continuous model under the free-sample alternatives.
+
+    Variants (:data:`FREE_VARIANTS`): the package's choice (every sample within ``l``, step
+    0.1 m); only the closest sample counting; a step equal to the grid size (``sample_step:
+    None`` stands for ``grid_size``); and the free-space evidence multiplied by a factor (same
+    counts, free column scaled, posterior recomputed).
+
+    Returns
+    -------
+    (rows, maps, boot): one row per variant (``key``, ``label``, ``task``, ``grid_size`` and the
+    scores of :func:`hw4.evaluate.score_map`, without ROC curves); the maps keyed by variant;
+    and, when ``n_boot > 0``, :func:`hw4.evaluate.bootstrap_scores` of the maps in variant
+    order (else None).
+    """
+    split = split or ev.intel_split()
+    rows, maps, built = [], {}, {}
+    for key, label, kw, factor in variants:
+        kw = {k: (grid_size if (k == "sample_step" and v is None) else v) for k, v in kw.items()}
+        tag = tuple(sorted(kw.items()))
+        if tag not in built:
+            data = ev.mapping_data(task, split)
+            semantic = task == 4
+            grid = Grid(grid_size, n_classes=7 if semantic else 2)
+            scans = data.scans if semantic else [np.asarray(s)[:2] for s in data.scans]
+            counts = count_evidence(grid, data.poses, scans, model="continuous",
+                                    semantic=semantic, **kw)
+            built[tag] = map_from_counts(grid, counts, semantic)
+        base = built[tag]
+        if factor != 1.0:
+            counts = base.counts.copy()
+            counts[:, -1] *= factor
+            m = map_from_counts(base.grid, counts, base.semantic)
+        else:
+            m = base
+        maps[key] = m
+        row = {"key": key, "label": label, "task": task, "model": ev.MODEL_NAMES[task],
+               "grid_size": float(grid_size), "accuracy": np.nan, "miou": np.nan}
+        row.update(ev.score_map(m, split.samples, keep_roc=False))
+        rows.append(row)
+    boot = ev.bootstrap_scores([maps[k] for k, *_ in variants], split.samples, n_boot, seed) \
+        if n_boot else None
+    return rows, maps, boot

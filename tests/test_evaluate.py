@@ -7,7 +7,7 @@ from types import SimpleNamespace
 import numpy as np
 import pytest
 
-from hw4 import evaluate as ev
+from hw4 import book, evaluate as ev
 from hw4.data import IntelData
 from hw4.errors import InputError
 from hw4.evidence import count_evidence
@@ -216,9 +216,9 @@ def test_evaluate_all_rows_at_the_coarse_grid():
     assert np.isnan(rows[1]["miou"]) and 0 < rows[2]["miou"] < 1
     arr = ev.as_array(rows)
     assert arr["auc"][1] == rows[1]["auc"] and arr["model"][0] == "log-odds"
-    table = ev.markdown_table(rows)
+    table = book.markdown_table(rows)
     assert table.count("\n") == 4 and "| log-odds | 0.5 |" in table
-    assert ev.glue_key(rows[1], "auc") == "auc_t1_g05"
+    assert book.glue_key(rows[1], "auc") == "auc_t1_g05"
     assert ev.select(rows, task=3, grid_size=0.5) == [rows[2]]
 
 
@@ -271,14 +271,82 @@ def test_binary_maps_read_at_one_half():
     assert r["occupied_recall"] == 0.5 and r["free_accuracy"] == 2 / 3
 
 
-def test_glue_rows_and_myst_table_agree_on_names():
-    rows = [{"model": "CSM", "task": 1, "grid_size": 0.27, "auc": 0.91, "coverage": 0.99,
-             "occupied_recall": 0.8, "free_accuracy": 0.95, "accuracy": np.nan, "miou": np.nan}]
-    glued = {}
-    names = ev.glue_rows(rows, lambda n, v, display: glued.update({n: v}))
-    assert glued == {"auc_t1_g027": 0.91, "coverage_t1_g027": 0.99,
-                     "occupied_recall_t1_g027": 0.8, "free_accuracy_t1_g027": 0.95}
-    assert names == list(glued)
-    table = ev.myst_table(rows)
-    assert "{glue:text}`auc_t1_g027:.3f`" in table and table.endswith("| – | – |")
-    assert all(f"`{n}:.3f`" in table for n in names)
+def test_bootstrap_scores_match_score_map_without_resampling_and_pair_the_draws():
+    rng = np.random.default_rng(11)
+    alpha = rng.uniform(0.1, 3.0, (6, 7))
+    sem = _toy_map([1] * 6, np.zeros(6), semantic_alpha=alpha)
+    binary = _toy_map([1] * 6, rng.uniform(0, 1, 6))
+    pts = rng.uniform(-0.4, 2.4, (60, 2)) * [1, 0.5]
+    occ = rng.uniform(size=60) < 0.4
+    label = np.where(occ, rng.integers(1, 7, 60), 0)
+    s = ev.HeldOut(pts, occ, label, rng.integers(0, 9, 60))
+    b = ev.bootstrap_scores([sem, binary], s, n_boot=40, seed=1)
+    assert b["n_common"] == 60
+    for i, m in enumerate((sem, binary)):
+        r = ev.score_map(m, s, keep_roc=False)
+        assert b["auc"][i] == pytest.approx(r["auc"], abs=1e-12)
+        assert b["occupied_recall"][i] == pytest.approx(r["occupied_recall"], abs=1e-12)
+    r = ev.score_map(sem, s, keep_roc=False)
+    assert b["accuracy"][0] == pytest.approx(r["accuracy"]) and b["miou"][0] == pytest.approx(r["miou"])
+    assert np.isnan(b["miou"][1])
+    # a map against itself: every paired replicate difference is exactly zero
+    same = ev.bootstrap_scores([binary, binary], s, n_boot=40, seed=1)
+    d = ev.paired_difference(same, 0, 1)
+    assert (d["diff"], d["lo"], d["hi"], d["p_le0"]) == (0.0, 0.0, 0.0, 1.0)
+    # replicates differ from the estimate (the draws do resample) and are reproducible
+    assert np.ptp(b["auc_replicates"][:, 1]) > 0
+    np.testing.assert_array_equal(b["auc_replicates"],
+                                  ev.bootstrap_scores([sem, binary], s, 40, 1)["auc_replicates"])
+    with pytest.raises(InputError):
+        ev.paired_difference(b, 0, 1, level=1.0)
+
+
+def test_closest_free_sample_matches_the_one_beam_profile():
+    from hw4.illustrate import beam_profile
+    g = 0.05
+    grid = Grid(g, (-0.5, 3.0), (-0.5, 0.5))
+    z = 2.0
+    poses = np.zeros((1, 3))
+    scans = [np.array([[z], [0.0]])]
+    on_line = np.isclose(grid.cells[:, 1], 0.0, atol=1e-9) & (grid.cells[:, 0] > 0)
+    x = grid.cells[on_line, 0]
+    for mode, closest in (("all", False), ("closest", True)):
+        c = count_evidence(grid, poses, scans, model="continuous", nearest_poses=1,
+                           free_samples=mode)
+        alpha, beta = beam_profile(x, z, closest_only=closest)
+        np.testing.assert_allclose(c[on_line, 1], beta, rtol=1e-9, atol=1e-12)
+        np.testing.assert_allclose(c[on_line, 0], alpha, rtol=1e-9, atol=1e-12)
+    allc = count_evidence(grid, poses, scans, model="continuous", nearest_poses=1)
+    close = count_evidence(grid, poses, scans, model="continuous", nearest_poses=1,
+                           free_samples="closest")
+    assert np.all(close[:, 1] <= allc[:, 1] + 1e-15) and close[:, 1].sum() < allc[:, 1].sum()
+    with pytest.raises(InputError):
+        count_evidence(grid, poses, scans, model="continuous", beams="all", free_samples="closest")
+    with pytest.raises(InputError):
+        count_evidence(grid, poses, scans, model="continuous", free_samples="nearest")
+
+
+def test_free_sample_study_scales_only_the_free_column():
+    from hw4 import studies
+    sp = ev.intel_split()
+    variants = (studies.FREE_VARIANTS[0], studies.FREE_VARIANTS[3])   # package, free x 0.5
+    rows, maps, boot = studies.free_sample_study(grid_size=0.5, variants=variants, n_boot=5)
+    a, b = maps["package"], maps["free_half"]
+    np.testing.assert_array_equal(b.counts[:, :-1], a.counts[:, :-1])
+    np.testing.assert_allclose(b.counts[:, -1], 0.5 * a.counts[:, -1])
+    # less free weight: more end points called some region
+    assert rows[1]["occupied_recall"] > rows[0]["occupied_recall"]
+    assert boot["auc_replicates"].shape == (5, 2)
+    ref = ev.build_eval_map(4, 0.5, sp)   # the face class gives the package's variant
+    np.testing.assert_allclose(a.counts, ref.counts, rtol=1e-12, atol=1e-12)
+
+
+def test_label_changes_between_frames_by_hand():
+    from hw4.growth import label_changes
+    # 4 cells, 3 classes (2 regions + free): cell 0 keeps region 0, cell 1 swaps 0 -> 1 with
+    # both labels seen, cell 2 turns free, cell 3 unobserved then region 1
+    a = np.array([[2, 0, 0], [1, 0, 0], [1, 0, 0], [0, 0, 0]], float)
+    b = np.array([[3, 0, 1], [1, 2, 0], [1, 0, 5], [0, 1, 0]], float)
+    (r,) = label_changes({10: (None, a), 20: (None, b)})
+    assert (r["n_from"], r["n_to"], r["region_both"]) == (10, 20, 2)
+    assert r["swapped"] == 0.5 and r["to_free"] == pytest.approx(1 / 3) and r["mixed_swapped"] == 1.0

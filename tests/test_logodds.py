@@ -121,3 +121,32 @@ def test_logodds_on_a_single_synthetic_scan():
     np.testing.assert_array_equal(m.logodds, ref)
     row = m.logodds.reshape(m.grid.shape)[m.grid.shape[0] // 2]  # y = 0: x = -1 .. 3
     np.testing.assert_array_equal(row, [0, 0, 0, -3, -3, -3, 3, 0, 0])
+
+
+def test_clamp_clips_the_sum_and_rejects_non_positive():
+    counts = np.array([[10.0, 0.0], [0.0, 10.0], [2.0, 1.0], [0.0, 0.0]])
+    np.testing.assert_array_equal(logodds_from_counts(counts, 3.0, -3.0, 0.0, clamp=5.0),
+                                  [5.0, -5.0, 3.0, 0.0])
+    np.testing.assert_array_equal(logodds_from_counts(counts, 3.0, -3.0), [30, -30, 3, 0])
+    with pytest.raises(Exception):
+        logodds_from_counts(counts, clamp=0.0)
+
+
+def test_tuning_picks_the_best_combination_and_never_sees_the_validation_scans():
+    from hw4.logodds import tune_logodds
+    d = load_intel(semantic=False)
+    d = IntelData(d.poses[:40], d.scans[:40])
+    seen = []
+
+    def score(m, val):
+        seen.append(len(val.scans))
+        return -abs(m.l_occ - 0.85) - abs(m.l_free + 1.5) - (m.clamp != np.inf)
+
+    best, rows = tune_logodds(0.5, d, score, every=10, offset=4)
+    assert best == {"l_occ": 0.85, "l_free": -1.5, "clamp": np.inf}
+    assert len(rows) == 4 * 4 * 3 and set(seen) == {4}
+    inner = IntelData(d.poses[np.arange(40) % 10 != 4],
+                      [s for i, s in enumerate(d.scans) if i % 10 != 4])
+    ref = build_logodds(0.5, inner)
+    m = build_logodds(0.5, inner, **best)
+    np.testing.assert_array_equal(m.counts, ref.counts)
