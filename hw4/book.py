@@ -178,3 +178,14 @@ def markdown_table(rows, columns=DEFAULT_COLUMNS, digits: int = 3) -> str:
     lines = ["| " + " | ".join(HEADS.get(c, c) for c in columns) + " |", _rule(columns)]
     lines += ["| " + " | ".join(fmt(c, r[c]) for c in columns) + " |" for r in rows]
     return "\n".join(lines)
+
+
+def class_legend_below(fig, num_classes: int = 6, ncol: int = 4):
+    """One legend for a figure of semantic maps, below its panels: the regions, free, unknown."""
+    from matplotlib.patches import Patch
+    from . import plotting
+    handles = [Patch(color=plotting.CLASS_COLORS[i], label=plotting.CLASS_NAMES[i])
+               for i in range(num_classes)]
+    handles += [Patch(facecolor=plotting.FREE_COLOR, edgecolor="0.6", label="free"),
+                Patch(color=plotting.UNKNOWN_COLOR, label="unknown")]
+    return fig.legend(handles=handles, loc="outside lower center", ncol=ncol, frameon=False)
