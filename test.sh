@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # The README's "test" command: set up, fetch the data, run the unit tests, re-execute every
 # notebook with nbval (stored outputs must match what the code produces now), then build the
-# book (HTML and PDF) with Sphinx warnings as errors. Exits non-zero on any failure.
+# book (HTML and PDF) with Sphinx warnings as errors, then open every HTML page in headless
+# Chromium with no network (tests_browser). Exits non-zero on any failure.
 set -eo pipefail
 cd "$(dirname "${BASH_SOURCE[0]}")"
 bash scripts/setup.sh
@@ -42,5 +43,8 @@ MPLBACKEND=module://matplotlib_inline.backend_inline run_pytest "${notebooks[@]}
 
 stage "book (HTML and PDF, Sphinx warnings as errors)"
 bash scripts/build_book.sh all
+
+stage "browser (every HTML page in headless Chromium, no network: maths, drawers at 420 px, images, videos, console)"
+run_pytest tests_browser
 
 stage "done"

@@ -33,3 +33,8 @@ if [ "$what" = all ] || [ "$what" = pdf ]; then
     cp _build/latex/hw4_book.pdf _build/hw4_book.pdf
     echo "book: PDF at _build/hw4_book.pdf"
 fi
+
+# The HTML links the whole book's PDF (book/_ext/templates/hw4-pdf-link.html) next to index.html.
+if [ -d _build/html ] && [ -s _build/hw4_book.pdf ]; then
+    cp _build/hw4_book.pdf _build/html/hw4_book.pdf
+fi

@@ -1,0 +1,206 @@
+"""The built HTML book in a real browser with no network: maths, navigation, images, videos.
+
+Every page of ``_build/html`` is opened in headless Chromium (see conftest.py) at 1400 px and at
+420 px wide. On each page: MathJax has typeset every formula (no raw TeX left, no MathJax error),
+every image and video has loaded, the page made no request beyond 127.0.0.1 and logged no console
+error; at 420 px the chapter-list and page-contents buttons open their drawers, at 1400 px the
+sidebar button collapses and restores the chapter list. Screenshots of each page at both widths
+(and of the open drawer) go to ``_build/browser/`` for a person to look at.
+
+Run after the book is built (test.sh does): ``python -m pytest -p no:cacheprovider tests_browser``.
+"""
+from __future__ import annotations
+
+import json
+import time
+from pathlib import Path
+from urllib.parse import urlparse
+
+import pytest
+
+HTML = Path(__file__).resolve().parent.parent / "_build" / "html"
+
+WIDE, NARROW, HEIGHT = 1400, 420, 1000
+PAGES = sorted(p.relative_to(HTML).as_posix() for p in HTML.rglob("*.html")
+               if "_static" not in p.parts and "_sources" not in p.parts
+               and p.name != "index.html")  # index.html only redirects to book/intro.html
+CHAPTERS = [p for p in PAGES if p.startswith(("book/", "notebooks/"))]
+
+# Wait for MathJax (when the page loads it) and for every image and video; return what they did.
+LOAD_STATE = """
+const done = arguments[arguments.length - 1];
+(async () => {
+  const out = {};
+  if (window.MathJax && MathJax.startup && MathJax.startup.promise) {
+    await MathJax.startup.promise;
+  }
+  out.mathjax = !!(window.MathJax && MathJax.startup && MathJax.startup.document);
+  const maths = Array.from(document.querySelectorAll("span.math, div.math"));
+  out.maths = maths.length;
+  out.untypeset = maths.filter(m => !m.querySelector("mjx-container")).length;
+  out.mathErrors = Array.from(document.querySelectorAll("mjx-merror, [data-mjx-error]"))
+      .map(e => e.getAttribute("data-mjx-error") || e.textContent).slice(0, 5);
+  const article = document.querySelector("article") || document.body;
+  const copy = article.cloneNode(true);
+  copy.querySelectorAll("pre, code, mjx-container, script, style").forEach(e => e.remove());
+  const text = copy.textContent;
+  out.rawTex = ["$$", "\\\\(", "\\\\[", "\\\\begin{"].filter(s => text.includes(s));
+  const imgs = Array.from(document.images);
+  imgs.forEach(i => { i.loading = "eager"; });
+  await Promise.all(imgs.map(i => i.complete ? null : new Promise(r => {
+    i.addEventListener("load", r); i.addEventListener("error", r); })));
+  out.images = imgs.length;
+  out.brokenImages = imgs.filter(i => !(i.complete && i.naturalWidth > 0)).map(i => i.src);
+  const videos = Array.from(document.querySelectorAll("video"));
+  await Promise.all(videos.map(v => v.readyState >= 2 || v.error ? null : new Promise(r => {
+    v.preload = "auto";
+    v.addEventListener("loadeddata", r); v.addEventListener("error", r, true);
+    setTimeout(r, 20000); v.load(); })));
+  out.videos = videos.length;
+  out.brokenVideos = videos.filter(v => v.readyState < 2 || v.error || !v.videoWidth)
+      .map(v => (v.currentSrc || v.querySelector("source").src) + " readyState=" + v.readyState);
+  const posters = videos.map(v => v.poster).filter(Boolean);
+  out.brokenPosters = (await Promise.all(posters.map(src => new Promise(r => {
+    const i = new Image(); i.onload = () => r(i.naturalWidth > 0 ? null : src);
+    i.onerror = () => r(src); i.src = src; })))).filter(Boolean);
+  const pdf = document.querySelector(".hw4-pdf-link a");
+  out.pdfLink = pdf ? pdf.href : null;
+  if (pdf) {
+    const res = await fetch(pdf.href, {method: "HEAD"});
+    out.pdfStatus = res.status;
+    out.pdfType = res.headers.get("content-type");
+  }
+  return out;
+})().then(done, e => done({scriptError: String(e)}));
+"""
+
+VISIBLE = """
+const sel = arguments[0];
+return Array.from(document.querySelectorAll(sel)).find(b => {
+  const r = b.getBoundingClientRect(), s = getComputedStyle(b);
+  return r.width > 0 && r.height > 0 && s.visibility !== "hidden" && s.display !== "none";
+}) || null;
+"""
+
+DRAWER = """
+const d = document.getElementById(arguments[0]);
+if (!d) return null;
+const r = d.getBoundingClientRect();
+return {open: d.open, width: r.width, links: d.querySelectorAll("a[href]").length,
+        visibleLinks: Array.from(d.querySelectorAll("a[href]")).filter(a => {
+          const q = a.getBoundingClientRect(); return q.width > 0 && q.height > 0; }).length};
+"""
+
+
+def _viewport(driver, width):
+    driver.execute_cdp_cmd("Emulation.setDeviceMetricsOverride",
+                           {"width": width, "height": HEIGHT, "deviceScaleFactor": 1,
+                            "mobile": width < 992})
+
+
+def _open(driver, url):
+    driver.get_log("browser")  # drop what earlier pages logged
+    driver.get_log("performance")
+    driver.get(url)
+    state = driver.execute_async_script(LOAD_STATE)
+    time.sleep(0.2)
+    return state
+
+
+def _requests(driver):
+    urls = []
+    for entry in driver.get_log("performance"):
+        msg = json.loads(entry["message"])["message"]
+        if msg.get("method") == "Network.requestWillBeSent":
+            urls.append(msg["params"]["request"]["url"])
+    return urls
+
+
+def _nonlocal(urls):
+    return sorted({u for u in urls
+                   if urlparse(u).scheme not in ("data", "blob", "about", "chrome-error")
+                   and urlparse(u).hostname != "127.0.0.1"})
+
+
+def _console_errors(driver):
+    return [e["message"] for e in driver.get_log("browser") if e["level"] == "SEVERE"]
+
+
+def _check_loaded(state, page):
+    assert "scriptError" not in state, f"{page}: {state.get('scriptError')}"
+    assert not state["brokenImages"], f"{page}: images that did not load: {state['brokenImages']}"
+    assert not state["brokenVideos"], f"{page}: videos that did not load: {state['brokenVideos']}"
+    assert not state["brokenPosters"], f"{page}: video stills that did not load: {state['brokenPosters']}"
+    if state["maths"]:
+        assert state["mathjax"], f"{page}: has maths but MathJax did not start"
+        assert state["untypeset"] == 0, f"{page}: {state['untypeset']} of {state['maths']} formulas not typeset"
+        assert not state["mathErrors"], f"{page}: MathJax errors {state['mathErrors']}"
+    assert not state["rawTex"], f"{page}: raw TeX delimiters left in the text: {state['rawTex']}"
+
+
+def test_pages_found():
+    assert len(CHAPTERS) >= 8, f"expected the intro, background, T1-T6 and references, got {CHAPTERS}"
+
+
+@pytest.mark.parametrize("page", PAGES)
+def test_page_wide(driver, book_url, shots, page):
+    """1400 px: maths, images, videos, PDF link, local requests only, no console errors, sidebar."""
+    _viewport(driver, WIDE)
+    state = _open(driver, book_url + page)
+    _check_loaded(state, page)
+    if page in CHAPTERS:
+        assert state["pdfLink"], f"{page}: no link to the book's PDF"
+        assert state["pdfStatus"] == 200 and state["pdfType"] == "application/pdf", (
+            f"{page}: the PDF link {state['pdfLink']} gives {state['pdfStatus']} {state['pdfType']}"
+            " (scripts/build_book.sh all copies the PDF into _build/html)")
+    name = page.replace("/", "_").removesuffix(".html")
+    driver.save_screenshot(str(shots / f"{name}_1400.png"))
+
+    # the article header's sidebar button collapses the chapter list and brings it back
+    button = driver.execute_script(VISIBLE, ".primary-toggle")
+    if page in CHAPTERS:
+        assert button is not None, f"{page}: no visible sidebar button at {WIDE} px"
+    if button is not None:
+        sidebar = driver.find_element("id", "pst-primary-sidebar")
+        assert "pst-sidebar-hidden" not in sidebar.get_attribute("class")
+        button.click()
+        time.sleep(0.4)
+        assert "pst-sidebar-hidden" in sidebar.get_attribute("class"), (
+            f"{page}: the sidebar button did not collapse the chapter list at {WIDE} px")
+        assert not driver.execute_script(DRAWER, "pst-primary-sidebar-modal")["open"]
+        button.click()
+        time.sleep(0.4)
+        assert "pst-sidebar-hidden" not in sidebar.get_attribute("class")
+    errors = _console_errors(driver)
+    assert not errors, f"{page}: console errors at {WIDE} px: {errors}"
+    outside = _nonlocal(_requests(driver))
+    assert not outside, f"{page}: requests beyond 127.0.0.1: {outside}"
+
+
+@pytest.mark.parametrize("page", CHAPTERS)
+def test_page_narrow(driver, book_url, shots, page):
+    """420 px: the chapter-list and page-contents buttons open their drawers."""
+    _viewport(driver, NARROW)
+    state = _open(driver, book_url + page)
+    _check_loaded(state, page)
+    name = page.replace("/", "_").removesuffix(".html")
+    driver.save_screenshot(str(shots / f"{name}_420.png"))
+    for selector, dialog, what in ((".primary-toggle", "pst-primary-sidebar-modal", "chapter list"),
+                                   (".secondary-toggle", "pst-secondary-sidebar-modal", "page contents")):
+        button = driver.execute_script(VISIBLE, selector)
+        if what == "page contents" and button is None and page == "book/references.html":
+            continue  # a page without sections has no contents drawer
+        assert button is not None, f"{page}: no visible {what} button at {NARROW} px"
+        button.click()
+        time.sleep(0.5)
+        drawer = driver.execute_script(DRAWER, dialog)
+        assert drawer and drawer["open"], f"{page}: the {what} button did not open its drawer"
+        assert drawer["width"] > 100 and drawer["visibleLinks"] > 0, (
+            f"{page}: the {what} drawer is open but shows no links ({drawer})")
+        driver.save_screenshot(str(shots / f"{name}_420_{dialog.split('-')[1]}.png"))
+        driver.execute_script("document.getElementById(arguments[0]).close()", dialog)
+        time.sleep(0.3)
+    errors = _console_errors(driver)
+    assert not errors, f"{page}: console errors at {NARROW} px: {errors}"
+    outside = _nonlocal(_requests(driver))
+    assert not outside, f"{page}: requests beyond 127.0.0.1: {outside}"
