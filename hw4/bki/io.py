@@ -24,14 +24,15 @@ def write_csv(view: MapView, path) -> Path:
     path = Path(path)
     K = view.probs.shape[1]
     header = "x,y,z,state,class,variance," + ",".join(f"p_{k}" for k in range(K))
-    cols = [np.char.mod("%.4f", view.centres[:, a]) for a in range(3)]
-    cols += [STATE_NAMES[view.state], view.cls.astype(str), np.char.mod("%.6g", view.variance)]
-    cols += [np.char.mod("%.6g", view.probs[:, k]) for k in range(K)]
-    rows = np.stack(cols, axis=1) if len(view) else np.zeros((0, 6 + K), str)
     with open(path, "w") as f:
         f.write(header + "\n")
-        if len(rows):
-            f.write("\n".join(",".join(r) for r in rows.tolist()) + "\n")
+        for s in range(0, len(view), 8192):  # in slices: the text of all rows at once took ~0.8 GB
+            sl = slice(s, s + 8192)
+            cols = [np.char.mod("%.4f", view.centres[sl, a]) for a in range(3)]
+            cols += [STATE_NAMES[view.state[sl]], view.cls[sl].astype(str),
+                     np.char.mod("%.6g", view.variance[sl])]
+            cols += [np.char.mod("%.6g", view.probs[sl, k]) for k in range(K)]
+            f.write("\n".join(",".join(r) for r in np.stack(cols, axis=1).tolist()) + "\n")
     return path
 
 
