@@ -13,10 +13,11 @@
         The caption.
         ```
 
-    ``:still:`` (the image the PDF prints and the HTML shows before the video plays) defaults to
-    the video's path with ``_strip.png``, else ``.png``, in place of its suffix. Every option of
-    ``figure`` (``name``, ``width``, ``align``, ``alt``, ``class``, ``figwidth``) applies. The HTML
-    player is ``<video controls loop muted playsinline preload="metadata">`` with a download link
+    ``:still:`` (the image the PDF prints in the player's place; the HTML player shows the first
+    frame) defaults to the video's path with ``_strip.png``, else ``.png``, for its suffix. Every
+    option of ``figure`` (``name``, ``width``, ``align``, ``alt``, ``class``, ``figwidth``)
+    applies; ``:html-width:`` sets the player's width when it should differ from the still's. The HTML
+    player is ``<video controls loop muted playsinline preload="auto">`` with a download link
     as its fallback; the MP4 is copied into ``_downloads`` as ``{download}`` would.
 
 Offline MathJax
@@ -47,13 +48,14 @@ AUTHOR_ENV = "HW4_BOOK_AUTHOR"
 
 
 class video(nodes.General, nodes.Element):
-    """A video player; its single child is the still image (what non-HTML builders print)."""
+    """A video player; its child is the still image (what non-HTML builders print)."""
 
 
 class VideoFigure(Figure, SphinxDirective):
     """``figure`` with an MP4 player in the HTML and the still image elsewhere."""
 
-    option_spec = dict(Figure.option_spec, still=directives.unchanged)
+    option_spec = dict(Figure.option_spec, still=directives.unchanged,
+                       **{"html-width": directives.length_or_percentage_or_unitless})
 
     def run(self) -> list[nodes.Node]:
         video_rel = self.arguments[0]
@@ -61,6 +63,7 @@ class VideoFigure(Figure, SphinxDirective):
         if not Path(abspath).is_file():
             raise self.error(f"video file {video_rel!r} not found (looked for {abspath}).")
         still = self.options.pop("still", None)
+        html_width = self.options.pop("html-width", None)
         if still is None:
             stem = posixpath.splitext(video_rel)[0]
             for candidate in (f"{stem}_strip.png", f"{stem}.png"):
@@ -78,23 +81,19 @@ class VideoFigure(Figure, SphinxDirective):
         image = next(figs[0].findall(nodes.image))
         self.env.note_dependency(rel)
         player = video(src=self.env.dlfiles.add_file(self.env.docname, rel),
-                       width=image.get("width"), alt=image.get("alt", ""))
+                       width=html_width or image.get("width"), alt=image.get("alt", ""))
         image.replace_self(player)
         player += image
         return result
 
 
 def visit_video_html(self, node: video) -> None:
-    image = node.children[0]
-    poster = image["uri"]
-    if poster in self.builder.images:
-        poster = posixpath.join(self.builder.imgpath, urllib.parse.quote(self.builder.images[poster]))
     src = posixpath.join(self.builder.dlpath, urllib.parse.quote(node["src"]))
     style = f' style="width: {node["width"]}"' if node.get("width") else ""
     label = self.attval(node["alt"]) if node.get("alt") else "video"
     self.body.append(
-        f'<video class="hw4-video" controls loop muted playsinline preload="metadata" '
-        f'poster="{poster}" aria-label="{label}"{style}>'
+        f'<video class="hw4-video" controls loop muted playsinline preload="auto" '
+        f'aria-label="{label}"{style}>'
         f'<source src="{src}" type="video/mp4">'
         f'<a href="{src}">Download the video (MP4)</a></video>\n')
     raise nodes.SkipNode
