@@ -7,6 +7,10 @@ Gradescope takes two attachments (handout, "Submission Instructions"):
    (plus ``ogm_continous_S_CSM.py``, the misspelt module name the course's ``run.py`` imports);
 2. ``NAME_hw4.pdf``, the written part: this book's PDF.
 
+Task 5 asks for "a video of the mapping sequence included in the submission": the tgz also holds
+``NAME_hw4/videos/`` with the mapping videos the Task 5 chapter writes (:data:`VIDEOS`:
+SemanticKITTI sequence 04 and the toy scans), or the files given with ``--video``.
+
 The four files in ``hw4/`` are thin faces over the package's shared core (``template``,
 ``evidence``, ``grid``, ``sensor``, ``kernel``, ``posterior``, ...). So that they run next to the
 course's ``run.py`` and ``utils.py`` without the rest of this repository, the packager follows
@@ -46,6 +50,9 @@ CLASSES = {"ogm_CSM": "ogm_CSM", "ogm_continuous_CSM": "ogm_continuous_CSM",
            "ogm_continous_S_CSM": "ogm_continous_S_CSM"}
 PDF_CANDIDATES = ("_build/hw4_book.pdf", "_build/latex/hw4_book.pdf")
 UNIQNAME = re.compile(r"[a-z0-9]{1,8}")
+VIDEOS = ("notebooks/_static/t5_kitti04_mapping.mp4", "notebooks/_static/bki_mapping.mp4")
+"""The Task 5 mapping videos (written by notebooks/T5_bki_3d.ipynb), relative to the project."""
+VIDEO_SUFFIXES = (".mp4", ".gif", ".webm", ".mkv", ".mov", ".avi")
 
 README = """\
 {name}_hw4: NA 568 Homework 4 (mapping with counting sensor models)
@@ -56,6 +63,7 @@ ogm_S_CSM.py             Task 3, semantic counting sensor model
 ogm_continuous_S_CSM.py  Task 4, continuous semantic counting sensor model
 ogm_continous_S_CSM.py   the same class under the name the course's run.py imports
 hw4core/                 the shared implementation the four files import
+videos/                  Task 5: the map growing scan by scan ({videos})
 
 Put the course's run.py, utils.py and data/ next to these files and run
     python run.py --task_num N --plot
@@ -284,6 +292,27 @@ def find_pdf(pdf: str | Path | None = None) -> Path:
                      "`bash scripts/build_book.sh pdf` first, or pass --pdf PATH.")
 
 
+def find_videos(videos=None) -> list[Path]:
+    """The videos to submit: ``videos`` (paths) when given, else the chapter's :data:`VIDEOS`."""
+    if videos:
+        paths = [Path(v) for v in videos]
+        for path in paths:
+            if not path.is_file():
+                raise InputError(f"--video {path} is not a file.")
+            if path.suffix.lower() not in VIDEO_SUFFIXES:
+                raise InputError(f"--video {path} is not a video ({', '.join(VIDEO_SUFFIXES)}).")
+        names = [p.name for p in paths]
+        if len(set(names)) != len(names):
+            raise InputError("two --video files have the same name; rename one.")
+        return paths
+    paths = [PROJECT_ROOT / v for v in VIDEOS]
+    missing = [p for p in paths if not p.is_file()]
+    if missing:
+        raise InputError(f"the Task 5 video {missing[0]} is missing: run notebooks/T5_bki_3d.ipynb "
+                         "to write it, or pass --video PATH.")
+    return paths
+
+
 def _reset(info: tarfile.TarInfo) -> tarfile.TarInfo:
     info.uid = info.gid = 0
     info.uname = info.gname = ""
@@ -292,7 +321,7 @@ def _reset(info: tarfile.TarInfo) -> tarfile.TarInfo:
 
 
 def build_package(uniqname: str, pdf: str | Path | None = None, out: str | Path = ".",
-                  force: bool = False) -> tuple[Path, Path]:
+                  force: bool = False, videos=None) -> tuple[Path, Path]:
     """Write ``NAME_hw4.tgz`` and ``NAME_hw4.pdf`` into ``out``; return their paths.
 
     Parameters
@@ -305,17 +334,20 @@ def build_package(uniqname: str, pdf: str | Path | None = None, out: str | Path 
         Output folder (created when missing).
     force : bool
         Overwrite an existing ``NAME_hw4.tgz`` / ``NAME_hw4.pdf``.
+    videos : list of paths, optional
+        Videos for ``NAME_hw4/videos/`` (default: :data:`VIDEOS`).
     """
     from .atomic import Outputs
 
     name = validate_uniqname(uniqname)
     pdf_path = find_pdf(pdf)
+    video_paths = find_videos(videos)
     out = Path(out)
     tgz, pdf_out = out / f"{name}_hw4.tgz", out / f"{name}_hw4.pdf"
     same_pdf = pdf_out.exists() and pdf_path.resolve() == pdf_out.resolve()
     names = [tgz.name] + ([] if same_pdf else [pdf_out.name])
     with Outputs(out, names, force=force) as o, tempfile.TemporaryDirectory() as tmp:
-        _write_package(name, pdf_path, Path(tmp), o, same_pdf)
+        _write_package(name, pdf_path, Path(tmp), o, same_pdf, video_paths)
     return tgz, pdf_out
 
 
@@ -326,12 +358,21 @@ def _versions() -> dict:
             "scipy": scipy.__version__}
 
 
-def _write_package(name: str, pdf_path: Path, tmp: Path, o, same_pdf: bool) -> None:
+def _write_package(name: str, pdf_path: Path, tmp: Path, o, same_pdf: bool,
+                   videos=()) -> None:
     """Bundle, check and write the two attachments through ``o`` (:class:`hw4.atomic.Outputs`)."""
     folder = tmp / f"{name}_hw4"
     write_bundle(folder)
-    (folder / "README.txt").write_text(README.format(name=name, **_versions()))
+    (folder / "README.txt").write_text(README.format(
+        name=name, videos=", ".join(v.name for v in videos) or "none", **_versions()))
     check_bundle(folder)
+    if videos:
+        (folder / "videos").mkdir()
+        for v in videos:
+            try:
+                shutil.copyfile(v, folder / "videos" / v.name)
+            except OSError as e:
+                raise InputError(f"cannot read the video {v} ({e.strerror}).") from None
     for cache in folder.rglob("__pycache__"):
         shutil.rmtree(cache)
     buf = io.BytesIO()
@@ -353,7 +394,8 @@ def _write_package(name: str, pdf_path: Path, tmp: Path, o, same_pdf: bool) -> N
 # --------------------------------------------------------------------------- CLI
 
 def _run(args: argparse.Namespace) -> int:
-    tgz, pdf = build_package(args.uniqname, pdf=args.pdf, out=args.out, force=args.force)
+    tgz, pdf = build_package(args.uniqname, pdf=args.pdf, out=args.out, force=args.force,
+                             videos=getattr(args, "video", None))
     print(f"wrote {tgz} and {pdf}: upload both to Gradescope")
     return 0
 
@@ -369,6 +411,9 @@ def register(subparsers) -> argparse.ArgumentParser:
     p.add_argument("--pdf", default=None,
                    help="PDF of the written part (default: the built book, _build/hw4_book.pdf)")
     p.add_argument("--out", default=".", help="output folder (default: current folder)")
+    p.add_argument("--video", action="append", default=None, metavar="PATH",
+                   help="a Task 5 video for NAME_hw4/videos/ (repeat for more; default: the "
+                        "sequence 04 and toy mapping videos of the Task 5 chapter)")
     p.add_argument("--force", action="store_true", help="overwrite existing output files")
     p.set_defaults(func=_run)
     return p

@@ -15,6 +15,8 @@ what=${1:-all}
 
 if [ "$what" = all ] || [ "$what" = html ]; then
     echo "book: HTML"
+    # plotly.js for Task 5's interactive map, from the installed package (never a CDN)
+    python -c "from hw4.bki.interactive import vendor_plotly; vendor_plotly('notebooks/_static/interactive')"
     jupyter-book build . -W -n --keep-going
 fi
 

@@ -79,6 +79,9 @@ def test_package_runs_without_the_repository(tmp_path, fake_pdf):
 
     names = _extract(tgz, tmp_path / "x")
     assert all(n == "jdoe_hw4" or n.startswith("jdoe_hw4/") for n in names)
+    for video in package.VIDEOS:  # task 5: the mapping videos travel with the submission
+        src = package.PROJECT_ROOT / video
+        assert (tmp_path / "x" / "jdoe_hw4" / "videos" / src.name).read_bytes() == src.read_bytes()
     for face in ("ogm_CSM", "ogm_continuous_CSM", "ogm_S_CSM", "ogm_continuous_S_CSM",
                  "ogm_continous_S_CSM"):
         assert f"jdoe_hw4/{face}.py" in names
@@ -148,3 +151,15 @@ def test_register_adds_the_subcommand(tmp_path, fake_pdf, capsys):
     assert args.func(args) == 0
     assert (tmp_path / "jdoe_hw4.tgz").is_file() and (tmp_path / "jdoe_hw4.pdf").is_file()
     assert "jdoe_hw4.tgz" in capsys.readouterr().out
+
+
+def test_package_takes_the_videos_given(tmp_path, fake_pdf):
+    clip = tmp_path / "my_run.mp4"
+    clip.write_bytes(b"\x00\x00\x00\x18ftypmp42 not really a video")
+    tgz, _ = package.build_package("jdoe", pdf=fake_pdf, out=tmp_path / "o", videos=[clip])
+    names = _extract(tgz, tmp_path / "x")
+    assert [n for n in names if "/videos/" in n] == ["jdoe_hw4/videos/my_run.mp4"]
+    for bad, msg in ((tmp_path / "none.mp4", "is not a file"), (fake_pdf, "is not a video")):
+        with pytest.raises(InputError, match=msg):
+            package.build_package("jdoe", pdf=fake_pdf, out=tmp_path / "p", videos=[bad])
+    assert not (tmp_path / "p" / "jdoe_hw4.tgz").exists()

@@ -13,7 +13,7 @@ import numpy as np
 
 from ..atomic import Outputs
 from ..errors import InputError
-from .config import DATASETS, check_method, load_config
+from .config import DATASETS, check_map_memory, check_method, load_config
 from .voxelmap import METHODS
 
 DESCRIPTION = """\
@@ -21,8 +21,11 @@ Build a 3D semantic voxel map from a sequence of labelled scans with semantic Ba
 inference (S-BKI, Gan et al. 2020) or the semantic counting sensor model (S-CSM), inserting the
 scans one after another. Writes DIR/voxels.csv (every voxel with evidence: centre, state, class,
 variance, class probabilities), DIR/voxels.ply (occupied voxels as a coloured point cloud for
-CloudCompare or MeshLab), figures (3D render and top view, with and without var_thresh) and, with
---video, the map after each scan as GIF and MP4."""
+CloudCompare or MeshLab), figures (3D render and top view, with and without var_thresh; for
+SemanticKITTI seen from behind and above the car, with its path), DIR/map3d.html (an interactive 3D
+view that works offline, with plotly.min.js beside it), with --video the map after each scan as
+GIF and MP4, and with --mcap DIR/map.mcap (the map after each scan as ROS 2 MarkerArray messages,
+for Foxglove or `ros2 bag play` into RViz 2)."""
 
 EPILOG = """\
 examples:
@@ -56,7 +59,11 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                         "of the sequence's calib.txt")
     p.add_argument("--video", action="store_true",
                    help="also write the map after each scan as mapping.gif and mapping.mp4")
-    p.add_argument("--no-figures", action="store_true", help="write only voxels.csv and voxels.ply")
+    p.add_argument("--mcap", action="store_true",
+                   help="also write map.mcap: the map after each scan as ROS 2 MarkerArray messages "
+                        "(/semantic_map, /trajectory) for Foxglove or RViz 2")
+    p.add_argument("--no-figures", action="store_true",
+                   help="write only voxels.csv and voxels.ply (no figures, no map3d.html)")
     p.add_argument("--force", action="store_true", help="overwrite existing output files in DIR")
 
 
@@ -91,11 +98,26 @@ def run_bki(args) -> int:
     if n:
         loaders = loaders[:n]
     out = args.out or Path("out") / "bki" / f"{args.dataset}_{args.method}"
-    ours = ["voxels.csv", "voxels.ply", "mapping.gif", "mapping.mp4"] + [
+    ours = ["voxels.csv", "voxels.ply", "mapping.gif", "mapping.mp4", "map.mcap", "map3d.html",
+            "plotly.min.js"] + [
         f"map3d_{c}{s}.png" for c in ("class", "variance") for s in ("", "_no_var_thresh")] + [
         "topdown_class.png", "topdown_variance.png"]
     with Outputs(out, ours, force=getattr(args, "force", False)) as o:
         return _map_and_write(args, cfg, loaders, out, o)
+
+
+def _check_first_scan(loaders, cfg, method: str) -> None:
+    """Map the first scan with two classes to count its voxels; refuse a num_class that won't fit."""
+    from .pipeline import map_scans
+    if not len(loaders) or cfg.num_class <= 2:
+        return
+    two = cfg.with_(num_class=2)
+
+    def load():
+        s = loaders[0]()
+        return type(s)(s.points, np.minimum(np.asarray(s.labels), 1), s.origin, s.name)
+    step = next(iter(map_scans([load], two, method)))
+    check_map_memory(cfg, len(step.map.view()), "the first scan")
 
 
 def _map_and_write(args, cfg, loaders, out, o) -> int:
@@ -108,12 +130,24 @@ def _map_and_write(args, cfg, loaders, out, o) -> int:
     from .pipeline import map_scans, new_map
     from .voxelmap import FREE, OCCUPIED, UNKNOWN
 
+    from contextlib import nullcontext
+
+    from .ros2_mcap import MapRecorder
+
+    _check_first_scan(loaders, cfg, args.method)
     vmap = new_map(cfg, args.method)
     hits = free = 0
-    for step in tqdm(map_scans(loaders, cfg, args.method, vmap), total=len(loaders), unit="scan",
-                     desc=f"{args.method} {args.dataset}", file=sys.stderr):
-        hits += step.training.n_hits
-        free += step.training.n_free
+    origins = []
+    recorder = MapRecorder(o["map.mcap"]) if getattr(args, "mcap", False) else nullcontext()
+    with recorder as rec:
+        for step in tqdm(map_scans(loaders, cfg, args.method, vmap), total=len(loaders), unit="scan",
+                         desc=f"{args.method} {args.dataset}", file=sys.stderr):
+            hits += step.training.n_hits
+            free += step.training.n_free
+            origins.append(step.scan.origin)
+            if rec is not None:
+                rec.add(step.map.view(), step.scan.origin)
+    origins = np.array(origins)
     view = vmap.view()
     if len(view) == 0 and hits == 0:
         raise InputError(f"the {len(loaders)} scan(s) gave no training points within max_range "
@@ -127,24 +161,39 @@ def _map_and_write(args, cfg, loaders, out, o) -> int:
     write_csv(view, o["voxels.csv"])
     write_ply(view, o["voxels.ply"])
     written = ["voxels.csv", "voxels.ply"]
+    if getattr(args, "mcap", False):
+        written.append("map.mcap")
     title = {"sbki": "S-BKI", "scsm": "S-CSM"}[args.method]
+    # a street scene is seen from behind and above the car, with its path; the toy scene whole
+    street = args.dataset == "semantickitti"
+    cam = render.chase_camera(origins) if street else render.camera_for([view])
+    path = origins if street else None
     if not args.no_figures and len(view):
-        cam = render.camera_for([view])
+        from .interactive import write_interactive
         for colour in ("class", "variance"):
             for which in ("occupied", "reference"):
                 name = f"map3d_{colour}{'' if which == 'occupied' else '_no_var_thresh'}.png"
-                fig = render.plot_maps({title: view}, cam, colour, which, vmax=cfg.var_thresh)
+                fig = render.plot_maps({title: view}, cam, colour, which, vmax=cfg.var_thresh,
+                                       trajectory=path, log_variance=street)
                 fig.savefig(o[name], dpi=110, bbox_inches="tight")
                 plt.close(fig)
                 written.append(name)
-            fig = render.plot_topdown({title: view}, cam, colour, vmax=cfg.var_thresh)
+            fig = render.plot_topdown({title: view}, cam, colour, vmax=cfg.var_thresh,
+                                      trajectory=path, log_variance=street)
             fig.savefig(o[f"topdown_{colour}.png"], dpi=110)
             plt.close(fig)
             written.append(f"topdown_{colour}.png")
+        info = write_interactive(view, o["map3d.html"], trajectory=origins,
+                                 box=(cam.lo, cam.hi) if street else None, title=title,
+                                 js_path=o["plotly.min.js"])
+        written += ["map3d.html", "plotly.min.js"]
+        if info["factor"] > 1:
+            print(f"note: map3d.html shows {info['voxels']:,} cubes of {info['factor']} voxels per "
+                  "edge (most frequent class), to keep the page light.", file=sys.stderr)
     if args.video:  # a second pass, now that the final map fixes the camera of every frame
         groups = ((step.map.view(),) for step in map_scans(loaders, cfg, args.method))
-        render.mapping_video(groups, render.camera_for([view]), (title,), o["mapping.gif"],
-                             o["mapping.mp4"], width=5.0)
+        render.mapping_video(groups, cam, (title,), o["mapping.gif"], o["mapping.mp4"],
+                             width=5.0, trajectory=path)
         written += ["mapping.gif", "mapping.mp4"]
     st = view.state
     print(f"{len(loaders)} scans: {hits:,} training hits and {free:,} free points "

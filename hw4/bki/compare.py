@@ -53,3 +53,10 @@ def compare(a: MapView, b: MapView) -> dict:
             "free_to_class": int(((ca == 0) & (cb > 0)).sum()),
             "class_to_free": int(((ca > 0) & (cb == 0)).sum()),
             "class_to_class": int(((ca > 0) & (cb > 0) & differ).sum())}
+
+
+def distance_to_path(points: np.ndarray, path: np.ndarray) -> np.ndarray:
+    """Horizontal distance [m] from each of ``points`` (N, 3) to the nearest of the sensor origins
+    ``path`` (T, 3), world frame (a proxy for the range at which the scans saw a voxel)."""
+    from scipy.spatial import cKDTree
+    return cKDTree(np.asarray(path, float)[:, :2]).query(np.asarray(points, float)[:, :2])[0]

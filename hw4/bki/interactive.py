@@ -149,12 +149,13 @@ def interactive_figure(view: MapView, trajectory=None, box=None, max_voxels: int
     return fig, factor
 
 
-def vendor_plotly(folder) -> Path:
-    """Write plotly.js (``plotly.min.js`` of the installed plotly package) into ``folder``."""
+def vendor_plotly(folder, target=None) -> Path:
+    """Write plotly.js (``plotly.min.js`` of the installed plotly package) into ``folder``
+    (or to the file ``target``, e.g. a temporary name that the caller renames)."""
     from plotly.offline import get_plotlyjs
     folder = Path(folder)
     folder.mkdir(parents=True, exist_ok=True)
-    target = folder / "plotly.min.js"
+    target = Path(target) if target is not None else folder / "plotly.min.js"
     text = get_plotlyjs()
     if not target.exists() or target.read_text(encoding="utf-8") != text:
         tmp = target.with_name(target.name + ".partial")
@@ -164,15 +165,16 @@ def vendor_plotly(folder) -> Path:
 
 
 def write_interactive(view: MapView, path, trajectory=None, box=None, max_voxels: int = 40_000,
-                      title: str = "") -> dict:
+                      title: str = "", js_path=None) -> dict:
     """Write the interactive view of :func:`interactive_figure` as a stand-alone offline HTML page.
 
-    ``plotly.min.js`` is written beside ``path`` (once) and loaded from there. Returns a summary:
-    ``voxels`` (shown), ``factor`` (aggregation), ``faces``, ``bytes`` (page) and ``js_bytes``.
+    ``plotly.min.js`` is written beside ``path`` (once; or to ``js_path``, which the caller then
+    moves beside the page) and loaded from there by its name. Returns a summary: ``voxels``
+    (shown), ``factor`` (aggregation), ``faces``, ``bytes`` (page) and ``js_bytes``.
     """
     path = Path(path)
     fig, factor = interactive_figure(view, trajectory, box, max_voxels, title)
-    js = vendor_plotly(path.parent)
+    js = vendor_plotly(path.parent, js_path)
     html = fig.to_html(include_plotlyjs="plotly.min.js", full_html=True, div_id="map3d",
                        default_width="100%", default_height="100%",
                        config=dict(displaylogo=False, scrollZoom=True, responsive=True))

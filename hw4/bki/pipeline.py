@@ -11,6 +11,8 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Callable, Iterator
 
+import numpy as np
+
 from ..errors import InputError
 from .config import BKIConfig
 from .kitti import SemanticKITTISequence
@@ -44,9 +46,21 @@ def toy_paths(folder=None) -> list[Path]:
 
 
 class Loaders(list):
-    """A list of scan loaders; ``note`` says where the calibration came from ('' when not needed)."""
+    """A list of scan loaders; ``note`` says where the calibration came from ('' when not needed),
+    ``trajectory`` is the (T, 3) sensor origins [m, world frame] when known without reading the
+    scans (SemanticKITTI: from the poses; ``None`` for PCD scans)."""
 
     note: str = ""
+    trajectory = None
+
+    def __getitem__(self, i):
+        got = super().__getitem__(i)
+        if isinstance(i, slice):
+            out = Loaders(got)
+            out.note = self.note
+            out.trajectory = None if self.trajectory is None else self.trajectory[i]
+            return out
+        return got
 
 
 KITTI_04 = "semantickitti_04/sequences/04/"
@@ -86,6 +100,10 @@ def scan_source(dataset: str, path=None, cfg: BKIConfig | None = None,
         seq = SemanticKITTISequence(path, labels=(cfg.labels if cfg else "labels"), calib=calib)
         out = Loaders(lambda t=t: seq.scan(t) for t in range(len(seq)))
         out.note = seq.calib_note if "published" in seq.calib_note else ""
+        rows = [int(b.stem) if (b.stem.isascii() and b.stem.isdigit()
+                                and int(b.stem) < len(seq.origins)) else t
+                for t, b in enumerate(seq.bins)]  # scan NNNNNN has the pose on line NNNNNN
+        out.trajectory = np.asarray(seq.origins)[rows].copy()
         return out
     raise InputError(f"unknown dataset {dataset!r}; use toy or semantickitti.")
 

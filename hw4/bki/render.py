@@ -51,8 +51,8 @@ def camera_for(views, elev: float = 38.0, azim: float = -115.0, pad: float = 0.2
 
 
 def chase_camera(trajectory: np.ndarray, behind: float = 14.0, ahead: float = 26.0,
-                 side: float = 16.0, below: float = 2.6, above: float = 4.0, elev: float = 24.0,
-                 zoom: float = 1.25) -> Camera:
+                 side: float = 16.0, below: float = 2.6, above: float = 4.0, elev: float = 28.0,
+                 zoom: float = 1.75) -> Camera:
     """A camera behind and above the car, looking along its direction of travel (as an RViz view
     that follows the car): the box spans ``behind`` m before the first pose to ``ahead`` m past the
     last, ``side`` m either side and ``below``/``above`` m around the sensor height.
