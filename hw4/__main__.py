@@ -28,7 +28,15 @@ def parser() -> argparse.ArgumentParser:
     return p
 
 
+def _terminated(signum, frame):
+    raise KeyboardInterrupt  # so that half-written outputs are cleaned up as on Ctrl-C
+
+
 def main(argv=None) -> int:
+    import signal
+    import threading
+    if threading.current_thread() is threading.main_thread():
+        signal.signal(signal.SIGTERM, _terminated)
     args = parser().parse_args(argv)
     try:
         return int(args.func(args) or 0)

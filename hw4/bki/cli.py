@@ -106,6 +106,14 @@ def run_bki(args) -> int:
         return _map_and_write(args, cfg, loaders, out, o)
 
 
+def _voxels(vmap) -> int:
+    """Voxels with evidence in a map so far."""
+    n = getattr(vmap, "n_voxels", None)
+    if n is None:
+        n = int(np.count_nonzero(vmap.pool[:vmap.n_blocks, :, -1]))
+    return int(n)
+
+
 def _check_first_scan(loaders, cfg, method: str) -> None:
     """Map the first scan with two classes to count its voxels; refuse a num_class that won't fit."""
     from .pipeline import map_scans
@@ -117,7 +125,7 @@ def _check_first_scan(loaders, cfg, method: str) -> None:
         s = loaders[0]()
         return type(s)(s.points, np.minimum(np.asarray(s.labels), 1), s.origin, s.name)
     step = next(iter(map_scans([load], two, method)))
-    check_map_memory(cfg, len(step.map.view()), "the first scan")
+    check_map_memory(cfg, _voxels(step.map), "the first scan")
 
 
 def _map_and_write(args, cfg, loaders, out, o) -> int:
@@ -144,6 +152,7 @@ def _map_and_write(args, cfg, loaders, out, o) -> int:
                          desc=f"{args.method} {args.dataset}", file=sys.stderr):
             hits += step.training.n_hits
             free += step.training.n_free
+            check_map_memory(cfg, _voxels(vmap), f"the first {step.index + 1} scan(s)")
             origins.append(step.scan.origin)
             if rec is not None:
                 rec.add(step.map.view(), step.scan.origin)

@@ -42,7 +42,7 @@ class BKIConfig:
         return replace(self, **kw)
 
 
-MIN_LENGTH = 1e-4     # smallest resolution, ds_resolution, free_resolution, ell [m] (0.1 mm)
+MIN_LENGTH = 1e-4     # smallest resolution, ds_resolution, ell [m] (0.1 mm)
 MAX_SCALE = 1e50      # largest sf2 and prior: beyond, the Dirichlet sums overflow
 MIN_PRIOR = 1e-100    # smallest prior
 MAX_CLASSES = 1 << 16  # SemanticKITTI label ids are 16-bit
@@ -125,7 +125,7 @@ def check_config(cfg: BKIConfig, where: str = "the config") -> None:
         if not (isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v)
                 and v > 0):
             raise InputError(f"{name} in {where} must be positive; got {v}.")
-    for name in ("resolution", "free_resolution", "ds_resolution", "ell"):
+    for name in ("resolution", "ds_resolution", "ell"):  # free_resolution: see free_samples
         if getattr(cfg, name) < MIN_LENGTH:
             raise InputError(f"{name} in {where} is {getattr(cfg, name)} m, below {MIN_LENGTH:g} m "
                              "(0.1 mm): check the units (metres).")
@@ -161,3 +161,22 @@ def check_method(cfg: BKIConfig, method: str) -> None:
         raise InputError(f"with ell {cfg.ell} m and resolution {cfg.resolution} m each training point "
                          f"would reach {side ** 3:.3g} voxels ({side}^3), more than the limit of "
                          f"{MAX_NEIGHBOURHOOD:,}: use a coarser resolution or a smaller ell.")
+
+
+MAX_MAP_BYTES = 4 * 2**30  # refuse maps whose evidence arrays would need more than this
+BYTES_PER_VOXEL_CLASS = 48  # peak memory per voxel and class [bytes]: measured 348 MB for the
+                            # toy map (126k voxels) with num_class 50, about 40 B above the interpreter
+
+
+def check_map_memory(cfg: BKIConfig, voxels: int, scans: str = "one scan") -> None:
+    """Refuse when ``voxels`` voxels of ``cfg.num_class`` classes would exceed :data:`MAX_MAP_BYTES`.
+
+    The caller measures ``voxels`` (e.g. the voxels the first scan reaches, mapped with two
+    classes); the message gives the estimate in GiB.
+    """
+    need = float(voxels) * (cfg.num_class + 1) * BYTES_PER_VOXEL_CLASS
+    if need > MAX_MAP_BYTES:
+        raise InputError(f"num_class {cfg.num_class} with the {voxels:,} voxels of {scans} would need "
+                         f"about {need / 2**30:.3g} GiB for the map's evidence, more than the "
+                         f"{MAX_MAP_BYTES / 2**30:.0f} GiB limit: use fewer classes or a coarser "
+                         "resolution.")
