@@ -21,6 +21,8 @@ offsets in lexicographic order), so the result is deterministic and independent 
 """
 from __future__ import annotations
 
+import os
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 
 import numpy as np
@@ -34,6 +36,19 @@ _SHIFT = 2               # log2(B)
 _OFF = np.int64(1 << 20)  # block index offset for packing; |block index| < 2^20
 _CHUNK_PAIRS = 1 << 15   # candidate (point, voxel) pairs handled at once (fits in the CPU cache)
 _MAX_BOX = 1 << 24       # most voxels in one scan's scratch box of voxels
+_MAX_DIRECT = 1 << 21    # most (voxel, class) sums of a scan's box summed without compaction
+
+THREADS = min(2, os.cpu_count() or 1)
+"""Threads that generate the (point, voxel) pairs of a scan (numpy releases the GIL). The map does
+not depend on it: each pair is computed alone, and the sums run in one fixed order."""
+_pool: tuple | None = None  # (process id, executor): a forked child makes its own
+
+
+def _executor() -> ThreadPoolExecutor:
+    global _pool
+    if _pool is None or _pool[0] != os.getpid() or _pool[1]._max_workers != THREADS:
+        _pool = (os.getpid(), ThreadPoolExecutor(THREADS, thread_name_prefix="hw4-bki"))
+    return _pool[1]
 
 UNKNOWN, FREE, OCCUPIED = 0, 1, 2
 METHODS = ("sbki", "scsm")
@@ -189,82 +204,103 @@ class VoxelMap:
             self.update(points[order[half:]], labels[order[half:]])
             return
         stride = np.array([dims[1] * dims[2], dims[2], 1], np.int64)
+        shift = max(1, int(np.prod(dims.astype(np.int64))) - 1).bit_length()
         if self.method == "scsm":
-            code = (base - lo) @ stride
-            cls, w = labels, None  # weight 1 per point (counted exactly as integers)
+            key = (labels << shift) + (base - lo) @ stride
+            w = None  # weight 1 per point (counted exactly as integers)
         else:
-            code, cls, w = self._kernel_pairs(points, labels, base, lo, stride, R)
-        self._accumulate(code, cls, w, lo, dims)
+            key, w = self._kernel_pairs(points, labels, base, lo, stride, shift, R)
+        self._accumulate(key, w, shift, lo, dims)
 
-    def _kernel_pairs(self, points, labels, base, lo, stride, R):
-        """All (training point, voxel) pairs with centre distance < ell: codes, classes, weights.
+    def _kernel_pairs(self, points, labels, base, lo, stride, shift, R):
+        """All (training point, voxel) pairs with centre distance < ell: keys and weights.
 
-        The code of a pair is the raveled index of its voxel in the scan's box (origin ``lo``,
-        strides ``stride``). Pairs come point by point, per point in lexicographic offset order.
-        Per point and axis only a window of ``W`` consecutive offsets is tried, starting at the
-        first whose centre lies within ``ell`` along that axis alone (an offset outside ``ell`` on
-        one axis is outside in 3D, and along an axis those within form a run, as the centres are
-        monotone in the offset); ``W`` is the longest such run in the chunk (2 of 3 offsets for
-        0.3 m voxels and ell = 0.3 m, 6 of 7 for 0.1 m voxels).
+        The key of a pair is ``class << shift | code``, where ``code`` is the raveled index of its
+        voxel in the scan's box (origin ``lo``, strides ``stride``). Pairs come point by point, per
+        point in lexicographic offset order. Per point and axis only a window of ``W`` consecutive
+        offsets is tried, starting at the first whose centre lies within ``ell`` along that axis
+        alone: an offset outside ``ell`` on one axis is outside in 3D, and along an axis those
+        within form a run (the centres are monotone in the offset, so the squared distance falls,
+        then rises); the offsets before the run are those outside ``ell`` with the centre below
+        the point. ``W`` is the longest run in the chunk (2 of 3 offsets for 0.3 m voxels and
+        ell = 0.3 m, 6 of 7 for 0.1 m). Per-axis work is laid out (axis, offset, point) so that
+        numpy's inner loops run over points.
         """
         o = np.arange(-R, R + 1, dtype=np.int64)
         m = len(o)
         ell2 = self.ell ** 2
-        centre = (o + 0.5)[None, None, :]
-        res = self.resolution
-        nominal = min(m, int(np.ceil(2 * self.ell / res)))  # the run's length, but for rounding
+        centre = (o + 0.5)[None, :, None]
+        res, sf2, ell = self.resolution, self.sf2, self.ell
+        nominal = min(m, int(np.ceil(2 * ell / res)))  # the run's length, but for rounding
         step = max(1, _CHUNK_PAIRS // nominal ** 3)
-        offs = {}  # window width -> code offsets of the window's voxels from its corner
-        out_code, out_cls, out_w = [], [], []
-        for s in range(0, len(points), step):
-            p, b = points[s:s + step], base[s:s + step]
-            n = len(p)
-            diff = p[:, :, None] - (b[:, :, None] + centre) * res
-            sq = diff * diff                                            # (n, 3, m)
-            ok = sq < ell2
-            first = np.argmax(ok, axis=2)                               # (n, 3) start of the run
-            W = max(1, int(ok.sum(axis=2).max()))
-            if W not in offs:
-                j = np.arange(W, dtype=np.int64)
-                offs[W] = (j, ((j[:, None, None] * stride[0] + j[None, :, None] * stride[1])
-                               + j[None, None, :]).reshape(-1))
-            j, off = offs[W]
-            cols = first[:, :, None] + j
-            sqw = np.take_along_axis(sq, np.minimum(cols, m - 1), axis=2)
-            sqw[cols >= m] = np.inf                                     # beyond the reach: never inside
-            d2 = (sqw[:, 0, :, None, None] + sqw[:, 1, None, :, None]) + sqw[:, 2, None, None, :]
-            inside = d2 < ell2
-            idx = np.flatnonzero(inside)
-            pc = (b + o[first] - lo) @ stride                           # code of each window's corner
-            out_code.append((pc[:, None] + off).reshape(-1)[idx])
-            out_cls.append(np.repeat(labels[s:s + step], inside.reshape(n, -1).sum(axis=1)))
-            out_w.append(sparse_kernel_inside(np.sqrt(d2.reshape(-1)[idx]), self.sf2, self.ell))
-        if len(out_code) == 1:
-            return out_code[0], out_cls[0], out_w[0]
-        return np.concatenate(out_code), np.concatenate(out_cls), np.concatenate(out_w)
+        offs = {}  # window width -> key offsets of the window's voxels from its corner
+        for W in range(1, m + 1):
+            j = np.arange(W, dtype=np.int64)
+            offs[W] = ((j[:, None, None] * stride[0] + j[None, :, None] * stride[1])
+                       + j[None, None, :]).reshape(-1)
+        gather = {}  # (points, W) -> flat index of the window's first offset, per axis and point
+        point_key = (labels << shift) + (o[0] - lo) @ stride
+        pT, bT = np.ascontiguousarray(points.T), np.ascontiguousarray(base.T)
+        col_stride = stride[:, None]
 
-    def _accumulate(self, code, cls, w, lo, dims) -> None:
+        def chunk(s):
+            p, b = pT[:, s:s + step], bT[:, s:s + step]
+            n = p.shape[1]
+            diff = p[:, None, :] - (b[:, None, :] + centre) * res          # (3, m, n)
+            sq = np.full((3, 2 * m, n), np.inf)         # padded: a window may run past the reach
+            np.multiply(diff, diff, out=sq[:, :m])
+            ok = sq[:, :m] < ell2
+            W = max(1, int(ok.sum(axis=1).max()))
+            first = ((~ok) & (diff > 0)).sum(axis=1)                        # (3, n) run starts
+            g = gather.get((n, W))
+            if g is None:
+                j = np.arange(W, dtype=np.int64)
+                g = gather[(n, W)] = ((np.arange(3)[:, None] * (2 * m) + j) * n)[:, :, None] + np.arange(n)
+            sqw = sq.reshape(-1)[g + (first * n)[:, None, :]]               # (3, W, n)
+            d2 = (sqw[0][:, None, None, :] + sqw[1][None, :, None, :]) + sqw[2][None, None, :, :]
+            d2 = np.ascontiguousarray(d2.reshape(-1, n).T).reshape(-1)      # point-major
+            idx = np.flatnonzero(d2 < ell2)
+            pk = point_key[s:s + step] + ((b + first) * col_stride).sum(axis=0)  # window corner
+            key = (pk[:, None] + offs[W]).reshape(-1)[idx]
+            return key, sparse_kernel_inside(np.sqrt(d2[idx]), sf2, ell)
+
+        starts = range(0, len(points), step)
+        if THREADS > 1 and len(starts) > 1:
+            parts = list(_executor().map(chunk, starts))
+        else:
+            parts = [chunk(s) for s in starts]
+        if len(parts) == 1:
+            return parts[0]
+        return np.concatenate([k for k, _ in parts]), np.concatenate([w for _, w in parts])
+
+    def _accumulate(self, key, w, shift, lo, dims) -> None:
         """Sum the pairs' evidence per (voxel, class) and add it to the map's voxels.
 
-        ``code`` is the raveled index of each pair's voxel in the scan's box (origin ``lo``, shape
-        ``dims``); ``w`` None means weight 1 per pair. The sums run over the pairs in order.
+        ``key`` is ``class << shift | code`` with ``code`` the raveled index of each pair's voxel
+        in the scan's box (origin ``lo``, shape ``dims``); ``w`` None means weight 1 per pair. The
+        sums run over the pairs in their given order.
         """
         n_box = int(np.prod(dims.astype(np.int64)))
         K = self.num_class
-        seen = np.zeros(n_box, bool)
-        seen[code] = True
-        vt = np.flatnonzero(seen)                      # touched voxels, raveled box order
-        V = len(vt)
-        rank = np.empty(n_box, np.int32 if V < 2 ** 31 else np.int64)
-        rank[vt] = np.arange(V)
-        vr = rank[code]
-        add = np.bincount(vr * K + cls, weights=w, minlength=V * K).reshape(V, K)
-        cnt = np.bincount(vr, minlength=V)
+        if K << shift <= _MAX_DIRECT:  # small box: sum straight into (class, box voxel) bins
+            full = np.bincount(key, weights=w, minlength=K << shift).reshape(K, -1)
+            cnt = np.bincount(key, minlength=K << shift).reshape(K, -1).sum(axis=0)
+            vt = np.flatnonzero(cnt)                   # touched voxels, raveled box order
+            add, cnt = full[:, vt].T, cnt[vt]
+        else:                          # compact the touched voxels first
+            code = key & ((1 << shift) - 1)
+            seen = np.zeros(n_box, bool)
+            seen[code] = True
+            vt = np.flatnonzero(seen)
+            V = len(vt)
+            rank = np.empty(n_box, np.int32 if V < 2 ** 31 else np.int64)
+            rank[vt] = np.arange(V)
+            vr = rank[code]
+            add = np.bincount(vr * K + (key >> shift), weights=w, minlength=V * K).reshape(V, K)
+            cnt = np.bincount(vr, minlength=V)
         vox = np.column_stack(np.unravel_index(vt, tuple(int(x) for x in dims))) + lo
-        blk = vox >> _SHIFT
         local = (vox & (B - 1)) @ np.array([B * B, B, 1], np.int64)
-        bkeys = _pack(blk)
-        tkeys, inv = np.unique(bkeys, return_inverse=True)
+        tkeys, inv = np.unique(_pack(vox >> _SHIFT), return_inverse=True)
         rows = self._rows_for(tkeys)[inv]              # may grow the table
         slots = self.table[rows, local].astype(np.int64)
         new = slots < 0
