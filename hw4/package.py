@@ -292,6 +292,28 @@ def find_pdf(pdf: str | Path | None = None) -> Path:
                      "`bash scripts/build_book.sh pdf` first, or pass --pdf PATH.")
 
 
+def build_named_pdf(name: str) -> Path | None:
+    """Rebuild the book's PDF with ``name`` on its title page; return its path.
+
+    Runs ``scripts/build_book.sh pdf`` with ``HW4_BOOK_AUTHOR=name`` (read by the book's Sphinx
+    extension, ``book/_ext/hw4_book.py``), which writes ``_build/hw4_book.pdf``. Returns None when
+    this checkout has no build script (then the PDF already built is used).
+    """
+    script = PROJECT_ROOT / "scripts" / "build_book.sh"
+    if not script.is_file():
+        return None
+    env = dict(os.environ, HW4_BOOK_AUTHOR=name)
+    print(f"package: building the book PDF with {name} on its title page", file=sys.stderr)
+    res = subprocess.run(["bash", str(script), "pdf"], cwd=PROJECT_ROOT, env=env,
+                         capture_output=True, text=True)
+    pdf = PROJECT_ROOT / "_build" / "hw4_book.pdf"
+    if res.returncode != 0 or not pdf.is_file():
+        last = ((res.stderr.strip() or res.stdout.strip()).splitlines() or ["no message"])[-1]
+        raise InputError(f"building the book PDF with your name failed ({last}); fix the book "
+                         "build or pass --pdf PATH.")
+    return pdf
+
+
 def find_videos(videos=None) -> list[Path]:
     """The videos to submit: ``videos`` (paths) when given, else the chapter's :data:`VIDEOS`."""
     if videos:
@@ -329,7 +351,8 @@ def build_package(uniqname: str, pdf: str | Path | None = None, out: str | Path 
     uniqname : str
         UMich uniqname (1-8 lowercase letters or digits).
     pdf : path, optional
-        The written part; default: the book's ``_build/hw4_book.pdf``.
+        The written part; default: the book's PDF, rebuilt with ``uniqname`` on its title page
+        (:func:`build_named_pdf`), or ``_build/hw4_book.pdf`` in a checkout without the build script.
     out : path
         Output folder (created when missing).
     force : bool
@@ -340,7 +363,7 @@ def build_package(uniqname: str, pdf: str | Path | None = None, out: str | Path 
     from .atomic import Outputs
 
     name = validate_uniqname(uniqname)
-    pdf_path = find_pdf(pdf)
+    pdf_path = find_pdf(pdf if pdf is not None else build_named_pdf(name))
     video_paths = find_videos(videos)
     out = Path(out)
     tgz, pdf_out = out / f"{name}_hw4.tgz", out / f"{name}_hw4.pdf"
@@ -409,7 +432,8 @@ def register(subparsers) -> argparse.ArgumentParser:
                     "this repository) and the book PDF as NAME_hw4.pdf.")
     p.add_argument("--uniqname", required=True, help="your UMich uniqname (1-8 lowercase letters/digits)")
     p.add_argument("--pdf", default=None,
-                   help="PDF of the written part (default: the built book, _build/hw4_book.pdf)")
+                   help="PDF of the written part (default: the book's PDF, rebuilt with "
+                        "your uniqname on its title page)")
     p.add_argument("--out", default=".", help="output folder (default: current folder)")
     p.add_argument("--video", action="append", default=None, metavar="PATH",
                    help="a Task 5 video for NAME_hw4/videos/ (repeat for more; default: the "

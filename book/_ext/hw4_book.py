@@ -146,6 +146,7 @@ def setup(app: Sphinx) -> dict:
                  texinfo=(visit_video_other, depart_video_other))
     app.add_directive("video", VideoFigure)
     app.connect("builder-inited", check_mathjax)
-    app.connect("config-inited", override_author)
+    # after sphinx-external-toc has set root_doc, which the default latex_documents names
+    app.connect("config-inited", override_author, priority=900)
     app.connect("config-inited", light_mode)
     return {"version": "1.0", "parallel_read_safe": True, "parallel_write_safe": True}
