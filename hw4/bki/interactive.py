@@ -126,7 +126,7 @@ def interactive_figure(view: MapView, trajectory=None, box=None, max_voxels: int
         fig.add_trace(go.Mesh3d(
             x=verts[:, 0], y=verts[:, 1], z=verts[:, 2], i=tri[:, 0], j=tri[:, 1], k=tri[:, 2],
             color=f"rgb({r},{g},{b})", flatshading=True, name=names[k], showlegend=True,
-            hoverinfo="name", lighting=dict(ambient=0.55, diffuse=0.7, specular=0.05),
+            hoverinfo="name", lighting=dict(ambient=0.8, diffuse=0.45, specular=0.0),
             lightposition=dict(x=-1e4, y=-5e3, z=2e4)))
     if trajectory is not None:
         p = np.asarray(trajectory, float)
