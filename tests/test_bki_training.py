@@ -79,3 +79,21 @@ def test_free_points_are_downsampled_across_rays():
     assert td.n_hits == 2
     assert td.n_free == len(np.unique(np.floor(td.points[td.n_hits:] / 0.1), axis=0))
     assert td.n_free < 2 * 9
+
+
+@pytest.mark.parametrize("num_labels, spread", [(3, 0.3), (20, 1.0), (20, 0.2)])
+def test_downsample_matches_a_loop_over_leaves(num_labels, spread):
+    # many leaves and labels (the vote runs only in leaves with mixed labels) and few (every leaf
+    # votes): centroid and majority (ties to the smallest label) of each leaf as a plain loop
+    rng = np.random.default_rng(num_labels)
+    pts = np.round(rng.uniform(-spread, spread, (3000, 3)), 2)
+    lab = np.where(rng.random(3000) < 0.7, 5 % num_labels, rng.integers(0, num_labels, 3000))
+    cen, maj = downsample(pts, lab, 0.1, num_labels)
+    leaves = {}
+    for p, c in zip(pts, lab):
+        leaves.setdefault(tuple(np.floor(p / 0.1).astype(int)), []).append((p, c))
+    assert len(cen) == len(leaves)
+    for (leaf, members), c, m in zip(sorted(leaves.items()), cen, maj):
+        np.testing.assert_allclose(c, np.mean([p for p, _ in members], axis=0), rtol=0, atol=1e-12)
+        votes = np.bincount([lab_ for _, lab_ in members], minlength=num_labels)
+        assert m == int(np.flatnonzero(votes == votes.max())[0])

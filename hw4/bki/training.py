@@ -95,8 +95,21 @@ def downsample(points: np.ndarray, labels: np.ndarray | None, size: float,
     if labels is None:
         return cen, None
     k = int(num_labels if num_labels is not None else labels.max() + 1)
-    votes = np.bincount(inv * k + labels, minlength=m * k).reshape(m, k)
-    return cen, np.argmax(votes, axis=1)  # argmax takes the first maximum: smallest label wins ties
+    if m * k <= 4 * len(labels):  # few bins: count every leaf's votes
+        votes = np.bincount(inv * k + labels, minlength=m * k).reshape(m, k)
+        return cen, np.argmax(votes, axis=1)  # argmax takes the first maximum: smallest label wins
+    # a leaf whose points share one label has it as majority; vote only in the other leaves
+    majority = np.empty(m, np.int64)
+    majority[inv] = labels  # some label of each leaf's points
+    other = labels != majority[inv]
+    mixed = np.zeros(m, bool)
+    mixed[inv[other]] = True
+    if mixed.any():
+        rank = np.cumsum(mixed) - 1
+        sel = mixed[inv]
+        votes = np.bincount(rank[inv[sel]] * k + labels[sel], minlength=int(mixed.sum()) * k)
+        majority[mixed] = np.argmax(votes.reshape(-1, k), axis=1)  # first maximum: smallest label
+    return cen, majority
 
 
 def free_samples(hits: np.ndarray, origin: np.ndarray, free_resolution: float) -> np.ndarray:
@@ -127,19 +140,24 @@ def free_samples(hits: np.ndarray, origin: np.ndarray, free_resolution: float) -
                          f"for the {len(hits):,} rays of one scan (longest {length.max():.3g} m), "
                          f"about {total * BYTES_PER_FREE_SAMPLE / 2**30:.3g} GiB: use a larger "
                          "free_resolution or a max_range.")
-    with np.errstate(invalid="ignore", divide="ignore"):
-        unit = np.where(length[:, None] > 0, diff / length[:, None], 0.0)
     # number of j >= 1 with j * fr < L (guarded against rounding of L / fr)
     n = np.maximum(np.ceil(length / free_resolution).astype(np.int64) - 1, 0)
     n = np.where((n > 0) & (n * free_resolution >= length), n - 1, n)
     n = np.where((n + 1) * free_resolution < length, n + 1, n)
     tail = length > free_resolution
     per_ray = 1 + n + tail  # origin, the regular samples, the last one
-    ray = np.repeat(np.arange(len(hits)), per_ray)
     start = np.cumsum(per_ray) - per_ray
-    pos = np.arange(per_ray.sum()) - start[ray]  # 0 = origin, 1..n regular, n+1 tail
-    dist = np.where(pos <= n[ray], pos * free_resolution, length[ray] - free_resolution)
-    return origin + unit[ray] * dist[:, None]
+    out = np.empty((int(per_ray.sum()), 3))
+    out[start] = origin  # each ray's first sample (what origin + unit * 0 gives)
+    more = np.flatnonzero(per_ray > 1)  # rays longer than free_resolution (so L > 0)
+    if len(more):
+        k = per_ray[more] - 1
+        ray = np.repeat(more, k)
+        pos = np.arange(int(k.sum())) - np.repeat(np.cumsum(k) - k, k) + 1  # 1..n regular, n+1 tail
+        dist = np.where(pos <= n[ray], pos * free_resolution, length[ray] - free_resolution)
+        unit = diff[more] / length[more, None]
+        out[start[ray] + pos] = origin + unit[np.repeat(np.arange(len(more)), k)] * dist[:, None]
+    return out
 
 
 def training_data(scan: Scan, ds_resolution: float, free_resolution: float, max_range: float,
