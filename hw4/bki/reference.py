@@ -163,22 +163,53 @@ def missed_pairs(points: np.ndarray, labels: np.ndarray, resolution: float, ell:
     o = np.arange(-R, R + 1)
     offs = np.stack(np.meshgrid(o, o, o, indexing="ij"), -1).reshape(-1, 3)       # (m, 3)
     out_v, out_c, out_w, total = [], [], [], 0.0
+    # a pair can only be missed when the point lies within ell of block faces on two axes
+    D = 2 ** (block_depth - 1)
+    u = points / resolution + D / 2                       # block faces at multiples of D
+    near_face = np.abs(u - D * np.round(u / D)) * resolution < ell
+    cand = np.flatnonzero(near_face.sum(axis=1) >= 2)
+    total = float(_kernel_total(points, resolution, ell, sf2, offs))
     step = max(1, (1 << 21) // len(offs))
-    for s in range(0, len(points), step):                   # chunks bound the temporaries
-        p = points[s:s + step]
+    for s in range(0, len(cand), step):                     # chunks bound the temporaries
+        sel = cand[s:s + step]
+        p = points[sel]
         base = np.floor(p / resolution).astype(np.int64)                        # (n, 3)
         vox = base[:, None, :] + offs[None]                                     # (n, m, 3)
         d = np.linalg.norm(p[:, None, :] - (vox + 0.5) * resolution, axis=2)    # (n, m)
         near = d < ell
         diff = reference_block(vox, block_depth) != reference_block(base, block_depth)[:, None, :]
         n, j = np.nonzero(near & (diff.sum(axis=2) >= 2))
-        total += float(sparse_kernel_inside(d[near], sf2, ell).sum())
         out_v.append(vox[n, j])
-        out_c.append(labels[s:s + step][n])
+        out_c.append(labels[sel][n])
         out_w.append(sparse_kernel_inside(d[n, j], sf2, ell))
     if not out_v:
         return np.zeros((0, 3), np.int64), np.zeros(0, np.int64), np.zeros(0), 0.0
     return np.concatenate(out_v), np.concatenate(out_c), np.concatenate(out_w), total
+
+
+def _kernel_total(points, resolution, ell, sf2, offs) -> float:
+    """Summed kernel weight of all (point, voxel) pairs within ``ell`` (chunked)."""
+    total = 0.0
+    step = max(1, (1 << 21) // len(offs))
+    for s in range(0, len(points), step):
+        p = points[s:s + step]
+        c = (np.floor(p / resolution)[:, None, :] + offs[None] + 0.5) * resolution
+        d = np.linalg.norm(p[:, None, :] - c, axis=2)
+        total += float(sparse_kernel_inside(d[d < ell], sf2, ell).sum())
+    return total
+
+
+def test_blocks(points: np.ndarray, resolution: float, block_depth: int = 3) -> np.ndarray:
+    """Sorted keys of the blocks the reference predicts for one scan's training points.
+
+    A block is predicted ("test block") when it or one of its 6 face neighbours holds a training
+    point (``has_gp_points_in_bbox`` of the extended block). Keys pack the block indices like
+    :func:`reference_block` numbers them.
+    """
+    blk = np.unique(reference_block(np.floor(np.asarray(points, float) / resolution), block_depth),
+                    axis=0)
+    faces = np.vstack([np.zeros((1, 3), np.int64), np.eye(3, dtype=np.int64), -np.eye(3, dtype=np.int64)])
+    return np.unique(_keys((blk[:, None, :] + faces[None]).reshape(-1, 3)))
 
 
 def on_block_faces(points: np.ndarray, resolution: float, block_depth: int = 3) -> int:

@@ -109,6 +109,21 @@ class Lookup:
         return np.where(self.keys[pos] == q, self.cls[pos], 0)
 
 
+def predictions(view, seq, offset=0.0) -> tuple[np.ndarray, np.ndarray]:
+    """Ground truth and the map's class at every point of every scan of ``seq`` (concatenated).
+
+    ``seq`` gives the scans in the map's world frame (``.scan(t)``, ``len()``); ``offset`` is the
+    map's grid origin (see :class:`Lookup`). Returns two (N,) int arrays.
+    """
+    look = Lookup(view, offset)
+    gts, preds = [], []
+    for t in range(len(seq)):
+        s = seq.scan(t)
+        gts.append(np.asarray(s.labels, np.int64))
+        preds.append(look(s.points))
+    return np.concatenate(gts), np.concatenate(preds)
+
+
 def label_score(seq, relabel=None, num_class: int = 20) -> Score:
     """Score per-point labels against the ground truth over every scan of a sequence.
 
@@ -135,7 +150,8 @@ class Run:
     map : the map object after the last scan
     score : Score of the map's lookups
     n_hits, n_free : int, training hits and free samples inserted
-    insert_s, eval_s : float [s], time spent inserting and scoring
+    insert_s, eval_s : float [s], CPU time of this process spent inserting and scoring (CPU, not
+        wall-clock, time: on a shared machine it does not count the waits)
     """
 
     map: object
@@ -186,13 +202,13 @@ def run(insert_seq, query_seq, make_map, cfg, window: int = 10, schedule: str = 
     cache: dict = {}
     out = Run(vmap, None)
     for t in range(T):
-        t0 = time.perf_counter()
+        t0 = time.process_time()
         td = training_data(_checked(insert_seq.scan(t), K), cfg.ds_resolution, cfg.free_resolution,
                            cfg.max_range, K)
         vmap.update(td.points, td.labels)
         out.n_hits += td.n_hits
         out.n_free += td.n_free
-        t1 = time.perf_counter()
+        t1 = time.process_time()
         if schedule == "every":
             qs = range(max(0, t - window), t + 1)
         else:
@@ -212,6 +228,6 @@ def run(insert_seq, query_seq, make_map, cfg, window: int = 10, schedule: str = 
             for q in [q for q in cache if q < t + 1 - window]:
                 cache.pop(q)
         out.insert_s += t1 - t0
-        out.eval_s += time.perf_counter() - t1
+        out.eval_s += time.process_time() - t1
     out.score = score(conf)
     return out
