@@ -189,3 +189,17 @@ def class_legend_below(fig, num_classes: int = 6, ncol: int = 4):
     handles += [Patch(facecolor=plotting.FREE_COLOR, edgecolor="0.6", label="free"),
                 Patch(color=plotting.UNKNOWN_COLOR, label="unknown")]
     return fig.legend(handles=handles, loc="outside lower center", ncol=ncol, frameon=False)
+
+
+def class_and_variance(m, axes, label: str, vmax: float = 0.25, window: str | None = None,
+                       log: bool = True, vmin: float = 1e-3):
+    """Class map (``axes[0]``) and variance of the most likely class (``axes[1]``) of a semantic
+    map, zoomed onto ``window`` when given; returns the variance image (for a colour bar)."""
+    from . import plotting
+    plotting.plot_semantic(m, ax=axes[0], title=f"class, {label}", legend=False)
+    im = plotting.plot_variance(m, ax=axes[1], title=f"variance, {label}", vmax=vmax,
+                                colorbar=False, log=log, vmin=vmin)
+    if window:
+        for ax in axes:
+            zoom(ax, window)
+    return im
