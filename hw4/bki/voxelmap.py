@@ -39,8 +39,10 @@ _MAX_BOX = 1 << 24       # most voxels in one scan's scratch box of voxels
 _MAX_DIRECT = 1 << 21    # most (voxel, class) sums of a scan's box summed without compaction
 
 THREADS = min(2, os.cpu_count() or 1)
-"""Threads that generate the (point, voxel) pairs of a scan (numpy releases the GIL). The map does
-not depend on it: each pair is computed alone, and the sums run in one fixed order."""
+"""Threads that generate the (point, voxel) pairs of a scan (numpy releases the GIL), used when a
+point has at least 3 offsets per axis to try (e.g. 0.1 m voxels, ell = 0.3 m; with 0.3 m voxels a
+chunk's numpy calls are too short to gain). The map does not depend on it: each pair is computed
+alone, and the sums run in one fixed order."""
 _pool: tuple | None = None  # (process id, executor): a forked child makes its own
 
 
@@ -265,7 +267,7 @@ class VoxelMap:
             return key, sparse_kernel_inside(np.sqrt(d2[idx]), sf2, ell)
 
         starts = range(0, len(points), step)
-        if THREADS > 1 and len(starts) > 1:
+        if THREADS > 1 and len(starts) > 1 and nominal >= 3:  # thin windows: too little work per call
             parts = list(_executor().map(chunk, starts))
         else:
             parts = [chunk(s) for s in starts]
