@@ -87,7 +87,7 @@ def evidence_totals(counts) -> tuple:
 
 
 def options_study(grid_size: float = 0.27, tasks=(1, 2, 4), options=OPTIONS,
-                  split: ev.Split | None = None) -> list:
+                  split: ev.Split | None = None, maps: dict | None = None) -> list:
     """Template options versus the fuller options of the models, scored on held-out data.
 
     For each task and option: evidence kept (occupied and free, as a share of the fullest option
@@ -99,6 +99,7 @@ def options_study(grid_size: float = 0.27, tasks=(1, 2, 4), options=OPTIONS,
     list of dict: ``task``, ``model``, ``option``, ``nearest_poses``, ``beams``, ``occupied_evidence``,
     ``free_evidence``, ``occupied_kept``, ``free_kept`` (share of the fullest option's evidence),
     ``build_seconds`` and the scores of :func:`hw4.evaluate.score_map` (without ROC curves).
+    Pass a dict as ``maps`` to receive the built maps keyed by ``(task, nearest_poses, beams)``.
     """
     split = split or ev.intel_split()
     rows = []
@@ -113,6 +114,8 @@ def options_study(grid_size: float = 0.27, tasks=(1, 2, 4), options=OPTIONS,
             t0 = time.perf_counter()
             m = ev.build_eval_map(task, grid_size, split, **kw)
             secs = time.perf_counter() - t0
+            if maps is not None:
+                maps[(task, npose, beams)] = m
             occ, free = evidence_totals(m.counts)
             row = {"task": task, "model": ev.MODEL_NAMES[task], "option": label,
                    "nearest_poses": npose, "beams": beams, "grid_size": float(grid_size),
