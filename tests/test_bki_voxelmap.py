@@ -153,3 +153,33 @@ def test_scsm_counts_each_point_once_in_its_voxel():
     table = {tuple(v): tuple(r) for v, r in zip(vox.tolist(), e.tolist())}
     assert table == {(0, 0, 0): (0, 1, 1), (1, 0, 0): (0, 0, 1), (-1, 0, 0): (1, 0, 0)}
     assert math.isclose(m.view().alpha.sum(), 4 + 3 * 3 * 0.001)
+
+
+@pytest.mark.parametrize("res, ell", [(0.15, 0.3), (0.3, 0.3), (0.25, 0.1), (0.2, 0.5), (0.7, 0.3)])
+def test_offset_windows_miss_no_voxel_for_other_resolutions(res, ell):
+    # the update tries per axis only the run of offsets within ell; any voxel size against ell
+    pts, lab = _random_training(300, 3, spread=1.5)
+    pts[:60] = np.round(pts[:60] / res) * res + ell * np.sign(pts[:60])  # on faces, ell off centres
+    vmap = VoxelMap(res, 4, "sbki", SF2, ell)
+    vmap.update(pts, lab)
+    ev, cnt = {}, {}
+    literal_update(ev, cnt, pts, lab, res, 4, "sbki", SF2, ell)
+    vox, e, count = vmap.evidence()
+    got = {tuple(v): (row, c) for v, row, c in zip(vox.tolist(), e, count)}
+    assert set(got) == set(ev)
+    assert max(np.abs(got[k][0] - np.array(ev[k])).max() for k in ev) < 1e-9
+    assert all(got[k][1] == cnt[k] for k in ev)
+
+
+def test_same_map_bit_for_bit_with_one_or_two_threads(monkeypatch):
+    import hw4.bki.voxelmap as vm
+    pts, lab = _random_training(6000, 4, spread=2.0)  # many chunks of points
+    runs = []
+    for threads in (1, 2):
+        monkeypatch.setattr(vm, "THREADS", threads)
+        m = VoxelMap(0.1, 4, "sbki")
+        m.update(pts[:4000], lab[:4000])
+        m.update(pts[4000:], lab[4000:])
+        runs.append(m.evidence())
+    for a, b in zip(*runs):
+        assert np.array_equal(a, b)
