@@ -315,5 +315,10 @@ class SemanticKITTISequence:
                                  f"{b.name}; it must give one class 0..{len(CLASS_NAMES) - 1} per point.")
         keep = cls > 0 if self.unlabeled == "drop" else np.ones(len(cls), bool)
         xyz = pts[keep, :3].astype(float)
+        finite = np.all(np.isfinite(xyz), axis=1)
+        if not finite.all():
+            raise InputError(f"{b.name}: point {int(np.flatnonzero(~finite)[0])} of the kept points "
+                             f"has a NaN or infinite coordinate ({int((~finite).sum())} such points); "
+                             "the scan is corrupt.")
         world = xyz @ T[:3, :3].T + T[:3, 3]
         return Scan(world, cls[keep], self.origins[i].copy(), b.name)
