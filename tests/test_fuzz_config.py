@@ -139,7 +139,7 @@ def scene(semantic):
     return poses, scans if semantic else [s[:2] for s in scans]
 
 
-@settings(max_examples=examples(400))
+@settings(max_examples=examples(300))
 @given(st.sampled_from([ogm_CSM, ogm_S_CSM, ogm_continuous_CSM, ogm_continuous_S_CSM]),
        st.dictionaries(st.sampled_from(PARAMS), KEYWORD_VALUES, max_size=2))
 def test_template_keywords_checked_and_maps_finite_or_refused(cls, kw):

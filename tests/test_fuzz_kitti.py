@@ -128,7 +128,7 @@ def mutations(draw):
     return seq, ops, draw(st.data())
 
 
-@settings(max_examples=examples(250))
+@settings(max_examples=examples(200))
 @given(mutations())
 def test_mutated_sequence_is_read_finite_or_refused(case):
     seq, ops, data = case
@@ -144,7 +144,7 @@ def test_mutated_sequence_is_read_finite_or_refused(case):
             b.write_bytes(b.read_bytes()[:-draw(st.integers(1, 20))])
         elif op == "bin_add" and b:
             b.write_bytes(b.read_bytes() + draw(st.binary(min_size=1, max_size=32)))
-        elif op == "bin_nan" and b:
+        elif op == "bin_nan" and b and b.stat().st_size % 4 == 0 and b.stat().st_size:
             a = np.frombuffer(b.read_bytes(), "<f4").copy()
             a[draw(st.integers(0, len(a) - 1))] = draw(st.sampled_from([np.nan, np.inf, 3e38]))
             b.write_bytes(a.tobytes())
@@ -156,10 +156,10 @@ def test_mutated_sequence_is_read_finite_or_refused(case):
             lab.write_bytes(a.tobytes())
         elif op == "label_missing" and lab and lab.exists():
             lab.unlink()
-        elif op == "poses":
+        elif op == "poses" and (folder / "poses.txt").is_file():
             (folder / "poses.txt").write_bytes(_mutate_text(draw, (folder / "poses.txt").read_text(
                 errors="replace")))
-        elif op == "calib":
+        elif op == "calib" and (folder / "calib.txt").is_file():
             (folder / "calib.txt").write_bytes(_mutate_text(draw, (folder / "calib.txt").read_text(
                 errors="replace")))
         elif op == "calib_missing":
@@ -177,7 +177,7 @@ def test_mutated_sequence_is_read_finite_or_refused(case):
         elif op == "labels_file":
             shutil.rmtree(folder / "labels", ignore_errors=True)
             (folder / "labels").write_bytes(b"")
-        elif op == "huge_pose":
+        elif op == "huge_pose" and (folder / "poses.txt").is_file():
             text = (folder / "poses.txt").read_text(errors="replace").split(" ")
             text[3] = "1e300"
             (folder / "poses.txt").write_text(" ".join(text))
