@@ -147,9 +147,16 @@ def free_samples(hits: np.ndarray, origin: np.ndarray, free_resolution: float) -
     tail = length > free_resolution
     per_ray = 1 + n + tail  # origin, the regular samples, the last one
     start = np.cumsum(per_ray) - per_ray
+    more = np.flatnonzero(per_ray > 1)  # rays longer than free_resolution (so L > 0)
+    if 2 * len(more) > len(hits):  # most rays have samples beyond the origin: all in one go
+        with np.errstate(invalid="ignore", divide="ignore"):
+            unit = np.where(length[:, None] > 0, diff / length[:, None], 0.0)
+        ray = np.repeat(np.arange(len(hits)), per_ray)
+        pos = np.arange(per_ray.sum()) - start[ray]  # 0 = origin, 1..n regular, n+1 tail
+        dist = np.where(pos <= n[ray], pos * free_resolution, length[ray] - free_resolution)
+        return origin + unit[ray] * dist[:, None]
     out = np.empty((int(per_ray.sum()), 3))
     out[start] = origin  # each ray's first sample (what origin + unit * 0 gives)
-    more = np.flatnonzero(per_ray > 1)  # rays longer than free_resolution (so L > 0)
     if len(more):
         k = per_ray[more] - 1
         ray = np.repeat(more, k)

@@ -284,7 +284,7 @@ class VoxelMap:
         """
         n_box = int(np.prod(dims.astype(np.int64)))
         K = self.num_class
-        if K << shift <= _MAX_DIRECT:  # small box: sum straight into (class, box voxel) bins
+        if K << shift <= min(_MAX_DIRECT, 2 * len(key)):  # small box: straight into (class, voxel) bins
             full = np.bincount(key, weights=w, minlength=K << shift).reshape(K, -1)
             cnt = np.bincount(key, minlength=K << shift).reshape(K, -1).sum(axis=0)
             vt = np.flatnonzero(cnt)                   # touched voxels, raveled box order
