@@ -47,6 +47,7 @@ MANIFEST = PROJECT_ROOT / "data" / "manifest.tsv"
 INTEL = "intel/sample_Intel_dataset.mat"
 INTEL_SEMANTIC = "intel/sample_Intel_dataset_semantic.mat"
 N_LABELS = 6  # Intel semantic labels 1..6
+MAX_COORD = 1e9  # largest |pose| or |beam end point| coordinate accepted [m] (rad for headings)
 
 
 def manifest() -> dict[str, tuple[str, str]]:
@@ -255,6 +256,10 @@ def validate(poses: np.ndarray, scans: list, semantic: bool | None = None) -> No
     if not np.all(np.isfinite(poses)):
         bad = int(np.flatnonzero(~np.all(np.isfinite(poses), axis=1))[0])
         raise InputError(f"robot pose {bad} contains NaN or inf.")
+    if np.abs(poses).max() > MAX_COORD:
+        bad = int(np.flatnonzero(np.abs(poses).max(axis=1) > MAX_COORD)[0])
+        raise InputError(f"robot pose {bad} lies beyond {MAX_COORD:g} m (or turns beyond "
+                         f"{MAX_COORD:g} rad): check the units.")
     if len(scans) != len(poses):
         raise InputError(f"there are {len(poses)} poses but {len(scans)} scans; "
                          "each pose needs exactly one scan.")
@@ -266,6 +271,8 @@ def validate(poses: np.ndarray, scans: list, semantic: bool | None = None) -> No
             raise InputError(f"scan {t} is empty (no beam end points).")
         if not np.all(np.isfinite(s)):
             raise InputError(f"scan {t} contains NaN or inf.")
+        if np.abs(s[:2]).max() > MAX_COORD:
+            raise InputError(f"scan {t} has a beam end point beyond {MAX_COORD:g} m: check the units.")
         if semantic:
             if s.shape[0] != 3:
                 raise InputError(f"scan {t} has no label row (2xN): a semantic model needs the "

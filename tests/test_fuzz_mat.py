@@ -77,9 +77,9 @@ def structures(draw):
             scans[t] = np.zeros((2, 0))
         elif op == "row_scan" and scans and np.ndim(scans[t]) == 2 and len(scans[t]):
             scans[t] = scans[t][0]
-        elif op == "int_scan" and scans:
+        elif op == "int_scan" and scans and _numeric(scans[t]) and np.all(np.abs(scans[t]) < 1e9):
             scans[t] = np.round(scans[t]).astype(np.int32)
-        elif op == "bool_scan" and scans:
+        elif op == "bool_scan" and scans and _numeric(scans[t]):
             scans[t] = scans[t] > 0
         elif op == "extra_scan":
             scans.append(np.ones((2, 3)))

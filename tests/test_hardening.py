@@ -647,3 +647,17 @@ def test_coarse_resolution_is_blamed_not_max_range(tmp_path, capsys):
     err = cli_err(capsys, ["bki", str(toy_folder(tmp_path / "toy")), "--config", str(cfg),
                            "--out", str(tmp_path / "o"), "--no-figures"])
     assert "resolution 1000000.0 m is too coarse for ell" in err and "max_range" not in err
+
+
+@pytest.mark.parametrize("where", ["pose", "scan"])
+def test_huge_coordinates_refused_not_overflowed(where):
+    """Found by the fuzz suite: 1e308 m poses or beams overflowed in the geometry (warnings)."""
+    d = tiny_intel()
+    if where == "pose":
+        d.poses[1, 0] = 1e308
+    else:
+        d.scans[2][1, 4] = 1e308
+    m = ogm_continuous_CSM(range_x=[-4, 4], range_y=[-4, 4], grid_size=0.25)
+    with pytest.raises(InputError, match="beyond 1e\\+09 m") as e:
+        m.construct_map(d.poses, d.scans)
+    one_line(e)
