@@ -76,7 +76,12 @@ def _refuse_heavy(grid, poses, table, model, beams, nearest_poses, l, step) -> N
 def _check(value, name, lo=0.0, allow_none=False):
     if value is None and allow_none:
         return
-    if isinstance(value, bool) or not np.isscalar(value) or not np.isfinite(value) or value <= lo:
+    try:
+        finite = np.isscalar(value) and not isinstance(value, (str, bytes)) \
+            and np.isfinite(float(value))
+    except (OverflowError, TypeError, ValueError):
+        finite = False
+    if isinstance(value, bool) or not finite or value <= lo:
         raise InputError(f"{name} must be a finite number greater than {lo:g}; got {value!r}.")
 
 

@@ -30,11 +30,20 @@ def _number(v) -> bool:
     return not isinstance(v, bool) and isinstance(v, (int, float, np.integer, np.floating))
 
 
+def _finite(v) -> bool:
+    try:
+        return math.isfinite(float(v))
+    except OverflowError:
+        return False
+
+
 def check_range(r, name: str) -> tuple:
     """``r`` as a (lo, hi) pair of finite floats [m] with lo < hi, else :class:`InputError`."""
     if isinstance(r, (str, bytes)) or not hasattr(r, "__len__") or len(r) != 2 \
             or not all(_number(v) for v in r):
         raise InputError(f"{name} must be a pair [lo, hi] of numbers in metres; got {r!r}.")
+    if not (_finite(r[0]) and _finite(r[1])):
+        raise InputError(f"{name} must be finite with lo < hi; got [{r[0]}, {r[1]}].")
     lo, hi = float(r[0]), float(r[1])
     if not (np.isfinite(lo) and np.isfinite(hi) and hi > lo):
         raise InputError(f"{name} must be finite with lo < hi; got [{r[0]}, {r[1]}].")
@@ -51,12 +60,12 @@ def check_grid(grid_size, range_x=RANGE_X, range_y=RANGE_Y, n_classes: int = 2) 
     g = grid_size
     if not _number(g):
         raise InputError(f"grid_size must be a number of metres; got {g!r}.")
-    if not np.isfinite(g) or g <= 0:
+    if not _finite(g) or g <= 0:
         raise InputError(f"grid_size must be a positive number of metres; got {g}.")
     (x0, x1), (y0, y1) = check_range(range_x, "range_x"), check_range(range_y, "range_y")
     g = float(g)
-    cells = math.ceil((x1 + g - x0) / g) if (x1 + g - x0) / g < 1e300 else math.inf
-    cells *= math.ceil((y1 + g - y0) / g) if (y1 + g - y0) / g < 1e300 else math.inf
+    cells = math.ceil((x1 + g - x0) / g) * 1.0 if (x1 + g - x0) / g < 1e300 else math.inf
+    cells *= math.ceil((y1 + g - y0) / g) * 1.0 if (y1 + g - y0) / g < 1e300 else math.inf
     need = float(cells) * (BYTES_PER_CELL + BYTES_PER_CELL_CLASS * float(n_classes))
     if need > MAX_MAP_BYTES:
         many = f"{float(cells):.3g}" if math.isfinite(need) else "more than 1e300"
@@ -91,6 +100,7 @@ class Grid:
 
     def __post_init__(self):
         nx, ny = check_grid(self.grid_size, self.range_x, self.range_y, self.n_classes)
+        self.grid_size = float(self.grid_size)
         g, x0, y0 = self.grid_size, self.range_x[0], self.range_y[0]
         self.x = np.arange(x0, self.range_x[1] + g, g)
         self.y = np.arange(y0, self.range_y[1] + g, g)

@@ -14,6 +14,8 @@ and carries the attributes the course's ``utils.py`` plotting code reads (``map[
 """
 from __future__ import annotations
 
+import math
+
 import numpy as np
 from scipy.spatial import KDTree
 
@@ -30,10 +32,18 @@ MIN_PRIOR = 1e-100  # smaller priors underflow in the variance alpha beta / (s^2
 MAX_SCALE = 1e50    # larger priors or kernel scales overflow s^2 (s + 1) [evidence]
 
 
+def _finite(v) -> bool:
+    """True for a finite number (Python ints too large for a float are not)."""
+    try:
+        return math.isfinite(float(v))
+    except OverflowError:
+        return False
+
+
 def _positive(v, name: str, unit: str, hi: float = np.inf) -> float:
     """``v`` when it is a finite number in (0, hi], else :class:`InputError`."""
     if isinstance(v, bool) or not isinstance(v, (int, float, np.integer, np.floating)) \
-            or not (np.isfinite(v) and 0 < v <= hi):
+            or not (_finite(v) and 0 < float(v) <= hi):
         bound = f" and at most {hi:g}" if np.isfinite(hi) else ""
         raise InputError(f"{name} must be a finite positive number{' of ' + unit if unit else ''}"
                          f"{bound}; got {v!r}.")
@@ -93,14 +103,15 @@ class CountingSensorMap:
         if self.semantic:
             self.num_classes = kw.pop("num_classes", _data.N_LABELS)
             if isinstance(self.num_classes, bool) or not isinstance(
-                    self.num_classes, (int, np.integer)) or self.num_classes < 1:
-                raise InputError(f"num_classes must be a positive integer; got {self.num_classes!r}.")
+                    self.num_classes, (int, np.integer)) or not 1 <= self.num_classes <= 1 << 16:
+                raise InputError(f"num_classes must be a positive integer (at most 65536); got "
+                                 f"{self.num_classes!r}.")
         if kw:
             raise InputError(f"{type(self).__name__} got unknown parameter(s): {', '.join(kw)}.")
         if isinstance(prior_alpha, bool) or not np.isscalar(prior_alpha) or not isinstance(
                 prior_alpha, (int, float, np.integer, np.floating)) or not prior_alpha > 0:
             raise InputError(f"prior_alpha must be a positive number; got {prior_alpha!r}.")
-        if not MIN_PRIOR <= prior_alpha <= MAX_SCALE:
+        if not MIN_PRIOR <= float(prior_alpha) <= MAX_SCALE:
             raise InputError(f"prior_alpha must lie between {MIN_PRIOR:g} and {MAX_SCALE:g} (beyond, "
                              f"the posterior mean and variance overflow or underflow); got "
                              f"{prior_alpha!r}.")

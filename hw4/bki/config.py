@@ -109,6 +109,8 @@ def load_config(dataset_or_path: str | Path, defaults: str | None = None) -> BKI
         if not ok:
             kind = {int: "an integer", float: "a finite number", str: "a non-empty string"}[want]
             raise InputError(f"{name} in {path} must be {kind}; got {value!r}.")
+        if want is float:
+            flat[name] = float(value)  # TOML integers are 64-bit: always finite as floats
     base = BKIConfig()
     if defaults is not None and path != CONFIG_DIR / f"{defaults}.toml":
         base = load_config(defaults)

@@ -102,6 +102,11 @@ def check_rigid(T: np.ndarray, name: str, tol: float = 1e-4) -> None:
     """
     if not np.all(np.isfinite(T)):
         raise InputError(f"{name} contains NaN or infinite values.")
+    if np.abs(T[:3, 3]).max() > 1e9:
+        raise InputError(f"{name} has a translation beyond 1e9 m; check the units.")
+    if np.abs(T[:3, :3]).max() > 1 + tol:
+        raise InputError(f"{name} is not a rigid transform (an entry of its 3x3 part is "
+                         f"{np.abs(T[:3, :3]).max():.3g}, beyond a rotation's 1).")
     R = T[:3, :3]
     err = np.abs(R.T @ R - np.eye(3)).max()
     if err > tol or np.linalg.det(R) < 0:
