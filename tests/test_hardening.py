@@ -661,3 +661,31 @@ def test_huge_coordinates_refused_not_overflowed(where):
     with pytest.raises(InputError, match="beyond 1e\\+09 m") as e:
         m.construct_map(d.poses, d.scans)
     one_line(e)
+
+
+@pytest.mark.parametrize("kw", [dict(grid_size=2**64 - 3), dict(grid_size=2.6e-202),
+                                dict(prior_alpha=np.float32(0.5)), dict(num_classes=10**20),
+                                dict(z_max=10**400)])
+def test_extreme_keyword_numbers_checked_without_overflow(kw):
+    """Found by the long fuzz profile: these raised TypeError/OverflowError or cast warnings."""
+    cls = ogm_S_CSM if "num_classes" in kw else ogm_CSM
+    try:
+        m = cls(range_x=[-3, 3], range_y=[-3, 3], **{"grid_size": 0.5, **kw})
+    except InputError as e:
+        one_line(e)
+        return
+    d = tiny_intel(cls.semantic)
+    m.construct_map(d.poses, d.scans)
+    m.build_ogm()
+    assert np.all(np.isfinite(m.map["mean"])) and np.all(np.isfinite(m.map["variance"]))
+
+
+def test_kitti_pose_with_a_huge_rotation_entry_refused(tmp_path):
+    seq = tmp_path / "04"
+    write_sequence(seq, n_scans=1)
+    words = (seq / "poses.txt").read_text().split(" ")
+    words[0] = "1e308"
+    (seq / "poses.txt").write_text(" ".join(words))
+    with pytest.raises(InputError, match="not a rigid transform") as e:
+        SemanticKITTISequence(seq)
+    one_line(e)
