@@ -149,7 +149,9 @@ def _map_and_write(args, cfg, loaders, out, o) -> int:
     recorder = MapRecorder(o["map.mcap"]) if getattr(args, "mcap", False) else nullcontext()
     with recorder as rec:
         for step in tqdm(map_scans(loaders, cfg, args.method, vmap), total=len(loaders), unit="scan",
-                         desc=f"{args.method} {args.dataset}", file=sys.stderr):
+                         desc=f"{args.method} {args.dataset}", file=sys.stderr,
+                         disable=not sys.stderr.isatty()):  # a bar on a terminal only, so that
+            # a log or a caller reading stderr sees nothing but the one-line error, if any
             hits += step.training.n_hits
             free += step.training.n_free
             check_map_memory(cfg, _voxels(vmap), f"the first {step.index + 1} scan(s)")
