@@ -10,7 +10,6 @@ from __future__ import annotations
 import numpy as np
 import matplotlib as mpl
 import matplotlib.pyplot as plt
-from matplotlib.colors import ListedColormap
 from matplotlib.patches import Patch
 
 CLASS_NAMES = ["north rooms", "west rooms", "east rooms", "south rooms", "middle rooms", "hallways"]

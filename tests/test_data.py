@@ -1,6 +1,4 @@
 """The data step: find, copy or refuse; always verify; never overwrite what the user has."""
-import hashlib
-import shutil
 
 import numpy as np
 import pytest

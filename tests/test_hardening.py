@@ -19,7 +19,7 @@ from scipy.io import savemat
 from hw4 import atomic, tasks
 from hw4.__main__ import main
 from hw4.bki.config import load_config
-from hw4.bki.kitti import SemanticKITTISequence, read_calib, read_poses
+from hw4.bki.kitti import SemanticKITTISequence, read_calib
 from hw4.bki.pcd import read_labelled_scan, read_pcd
 from hw4.data import IntelData, ensure, ensure_all, load_intel
 from hw4.errors import InputError

@@ -33,7 +33,7 @@ import numpy as np
 
 from ..errors import InputError
 from ..kernel import sparse_kernel_inside
-from .voxelmap import FREE, OCCUPIED, UNKNOWN, MapView, VoxelMap, kernel_reach
+from .voxelmap import MapView, VoxelMap, kernel_reach, posterior_view
 
 FRAMES = ("velodyne", "reference")
 ORIGINS = ("true", "reference")
@@ -288,11 +288,4 @@ def _keys(idx: np.ndarray) -> np.ndarray:
 
 def _posterior(v: MapView, alpha: np.ndarray, var_thresh: float) -> MapView:
     """A :class:`MapView` like ``v`` with new concentrations ``alpha`` (classes, states recomputed)."""
-    total = alpha.sum(axis=1)
-    probs = alpha / total[:, None]
-    cls = np.argmax(alpha, axis=1)
-    p = probs[np.arange(len(cls)), cls]
-    var = p * (1 - p) / (total + 1)
-    ref = np.where(cls == 0, FREE, OCCUPIED)
-    state = np.where(var > var_thresh, UNKNOWN, ref)
-    return MapView(v.centres, alpha, probs, cls, var, state, ref, v.count, v.resolution)
+    return posterior_view(v.centres, alpha, v.count, v.resolution, var_thresh)

@@ -375,13 +375,20 @@ class VoxelMap:
     def view(self) -> MapView:
         """Posterior of every voxel with evidence (see :class:`MapView`)."""
         vox, ev, count = self.evidence()
-        alpha = ev + self.prior
-        total = alpha.sum(axis=1)
-        probs = alpha / total[:, None]
-        cls = np.argmax(alpha, axis=1)
-        p = probs[np.arange(len(cls)), cls]
-        var = p * (1 - p) / (total + 1)
-        ref = np.where(cls == 0, FREE, OCCUPIED)
-        state = np.where(var > self.var_thresh, UNKNOWN, ref)
-        return MapView((vox + 0.5) * self.resolution, alpha, probs, cls, var, state, ref, count,
-                       self.resolution)
+        return posterior_view((vox + 0.5) * self.resolution, ev + self.prior, count,
+                              self.resolution, self.var_thresh)
+
+
+def posterior_view(centres: np.ndarray, alpha: np.ndarray, count: np.ndarray, resolution: float,
+                   var_thresh: float) -> MapView:
+    """The :class:`MapView` of voxels with Dirichlet concentrations ``alpha`` (M, K): class
+    probabilities, most likely class (smallest on ties), its variance ``p (1 - p) / (S + 1)`` and
+    the states with and without ``var_thresh``."""
+    total = alpha.sum(axis=1)
+    probs = alpha / total[:, None]
+    cls = np.argmax(alpha, axis=1)
+    p = probs[np.arange(len(cls)), cls]
+    var = p * (1 - p) / (total + 1)
+    ref = np.where(cls == 0, FREE, OCCUPIED)
+    state = np.where(var > var_thresh, UNKNOWN, ref)
+    return MapView(centres, alpha, probs, cls, var, state, ref, count, resolution)
