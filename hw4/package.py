@@ -303,15 +303,30 @@ def build_named_pdf(name: str) -> Path | None:
     if not script.is_file():
         return None
     env = dict(os.environ, HW4_BOOK_AUTHOR=name)
-    print(f"package: building the book PDF with {name} on its title page", file=sys.stderr)
-    res = subprocess.run(["bash", str(script), "pdf"], cwd=PROJECT_ROOT, env=env,
-                         capture_output=True, text=True)
     pdf = PROJECT_ROOT / "_build" / "hw4_book.pdf"
-    if res.returncode != 0 or not pdf.is_file():
+    # the build removes the old PDF first: keep a copy to fall back on if it fails
+    backup = None
+    if pdf.is_file():
+        backup = Path(tempfile.mkdtemp(prefix="hw4-pdf-")) / pdf.name
+        shutil.copyfile(pdf, backup)
+    print(f"package: building the book PDF with {name} on its title page", file=sys.stderr)
+    try:
+        res = subprocess.run(["bash", str(script), "pdf"], cwd=PROJECT_ROOT, env=env,
+                             capture_output=True, text=True)
+        if res.returncode == 0 and pdf.is_file():
+            return pdf
         last = ((res.stderr.strip() or res.stdout.strip()).splitlines() or ["no message"])[-1]
-        raise InputError(f"building the book PDF with your name failed ({last}); fix the book "
-                         "build or pass --pdf PATH.")
-    return pdf
+        if backup is None:
+            raise InputError(f"building the book PDF with your name failed ({last}); fix the "
+                             "book build or pass --pdf PATH.")
+        pdf.parent.mkdir(parents=True, exist_ok=True)
+        shutil.copyfile(backup, pdf)
+        print(f"package: note: building the PDF with your name failed ({last}); using the PDF "
+              "built before, without your name on its title page.", file=sys.stderr)
+        return pdf
+    finally:
+        if backup is not None:
+            shutil.rmtree(backup.parent, ignore_errors=True)
 
 
 def find_videos(videos=None) -> list[Path]:

@@ -32,10 +32,11 @@ def test_mcap_round_trip_every_message_decodes_to_the_map(tmp_path):
         rec.add(b, origins[1])
     assert not (tmp_path / "map.mcap.partial").exists()
     msgs = ros2_mcap.read_markers(path)
-    assert [(t, n) for t, n, _ in msgs] == [("/semantic_map", 5_000_000_000), ("/trajectory", 5_000_000_000),
+    # the path (a LINE_STRIP) is published once it has two points
+    assert [(t, n) for t, n, _ in msgs] == [("/semantic_map", 5_000_000_000),
                                             ("/semantic_map", 5_100_000_000), ("/trajectory", 5_100_000_000)]
     pal, names = class_colors(4) / 255.0, class_names(4)
-    for (topic, _, msg), view in ((msgs[0], a), (msgs[2], b)):
+    for (topic, _, msg), view in ((msgs[0], a), (msgs[1], b)):
         occ = view.occupied
         live = [m for m in msg.markers if m.action == ros2_mcap.ADD]
         assert sorted(m.id for m in live) == sorted(set(view.cls[occ].tolist()))
@@ -47,10 +48,10 @@ def test_mcap_round_trip_every_message_decodes_to_the_map(tmp_path):
                                        [*pal[m.id], 1.0], rtol=1e-6)
             got = np.array([[p.x, p.y, p.z] for p in m.points])
             np.testing.assert_array_equal(got, view.centres[occ & (view.cls == m.id)])
-    gone = [m for m in msgs[2][2].markers if m.action == ros2_mcap.DELETE]
+    gone = [m for m in msgs[1][2].markers if m.action == ros2_mcap.DELETE]
     assert gone
     assert [m.id for m in gone] == sorted(set(a.cls[a.occupied].tolist()) - set(b.cls[b.occupied].tolist()))
-    path_msg = msgs[3][2].markers[0]
+    path_msg = msgs[2][2].markers[0]
     assert path_msg.type == ros2_mcap.LINE_STRIP
     np.testing.assert_array_equal([[p.x, p.y, p.z] for p in path_msg.points], origins)
 
@@ -143,3 +144,44 @@ def test_interactive_page_is_offline_and_complete(tmp_path):
     # aggregation bounds the voxel count
     small = interactive.write_interactive(view, tmp_path / "small.html", max_voxels=50)
     assert small["factor"] > 1 and small["voxels"] <= 50
+
+
+def test_mcap_error_on_finish_leaves_no_file(tmp_path, monkeypatch):
+    from mcap.writer import Writer
+    view = small_map([[0.1, 0.1, 0.1]], [1])
+
+    def broken(self):
+        raise OSError(28, "No space left on device")
+    monkeypatch.setattr(Writer, "finish", broken)
+    with pytest.raises(OSError):
+        with ros2_mcap.MapRecorder(tmp_path / "map.mcap") as rec:
+            rec.add(view, [0, 0, 0])
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_bki_cli_writes_mcap_and_interactive_page_whole(tmp_path, capsys):
+    """The toy run with --mcap: every declared output, no temporary file left, the MCAP's last
+    map is the written map, and a rerun needs --force."""
+    from hw4.__main__ import main
+    from hw4.bki import build_map, load_config, scan_source
+    out = tmp_path / "o"
+    argv = ["bki", "--dataset", "toy", "--mcap", "--out", str(out)]
+    assert main(argv) == 0
+    names = sorted(p.name for p in out.iterdir())
+    assert not [n for n in names if "partial" in n or n.startswith(".")]
+    for n in ("voxels.csv", "voxels.ply", "map.mcap", "map3d.html", "plotly.min.js",
+              "map3d_class.png", "topdown_variance.png"):
+        assert n in names
+    cfg = load_config("toy")
+    view = build_map(scan_source("toy"), cfg, "sbki")[0].view()
+    msgs = ros2_mcap.read_markers(out / "map.mcap")
+    maps = [m for t, _, m in msgs if t == "/semantic_map"]
+    assert len(maps) == 12
+    got = sum(len(m.points) for m in maps[-1].markers if m.action == ros2_mcap.ADD)
+    assert got == int(view.occupied.sum())
+    html = (out / "map3d.html").read_text()
+    assert 'src="plotly.min.js"' in html
+    capsys.readouterr()
+    assert main(argv) == 2
+    assert "already exists" in capsys.readouterr().err
+    assert main(argv + ["--force"]) == 0

@@ -146,7 +146,7 @@ def _map_and_write(args, cfg, loaders, out, o) -> int:
     vmap = new_map(cfg, args.method)
     hits = free = 0
     origins = []
-    recorder = MapRecorder(o["map.mcap"]) if getattr(args, "mcap", False) else nullcontext()
+    recorder = MapRecorder(o["map.mcap"], atomic=False) if getattr(args, "mcap", False) else nullcontext()
     with recorder as rec:
         for step in tqdm(map_scans(loaders, cfg, args.method, vmap), total=len(loaders), unit="scan",
                          desc=f"{args.method} {args.dataset}", file=sys.stderr,

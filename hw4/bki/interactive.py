@@ -8,8 +8,8 @@ that works with no network: plotly.js is written once beside it (``plotly.min.js
 installed plotly package) and loaded by a relative path, never from a CDN.
 
 Page weight: vertex coordinates are float32 and face indices int32, stored base64-encoded (plotly
->= 6), about 30 bytes per shown face. A map with more than ``max_voxels`` occupied voxels is
-aggregated first (:func:`aggregate`): voxels are merged into cubes of 2, 4, ... voxels per edge,
+>= 6), about 50 bytes per shown face. A map with more than ``max_voxels`` occupied voxels is
+aggregated first (:func:`aggregate`; default 50,000): voxels are merged into cubes of 2, 4, ... voxels per edge,
 each taking the most frequent class of the voxels it holds, until at most ``max_voxels`` remain.
 """
 from __future__ import annotations
@@ -91,7 +91,7 @@ def cube_mesh(idx: np.ndarray, edge: float) -> tuple[np.ndarray, np.ndarray]:
     return (uniq * edge).astype(np.float32), tri
 
 
-def interactive_figure(view: MapView, trajectory=None, box=None, max_voxels: int = 40_000,
+def interactive_figure(view: MapView, trajectory=None, box=None, max_voxels: int = 50_000,
                        title: str = ""):
     """The occupied voxels of ``view`` as a plotly figure (one mesh per class, the car's path).
 
@@ -155,21 +155,32 @@ def vendor_plotly(folder, target=None) -> Path:
     from plotly.offline import get_plotlyjs
     folder = Path(folder)
     folder.mkdir(parents=True, exist_ok=True)
-    target = Path(target) if target is not None else folder / "plotly.min.js"
     text = get_plotlyjs()
+    if target is not None:              # the caller's temporary name: write it directly
+        Path(target).write_text(text, encoding="utf-8")
+        return Path(target)
+    target = folder / "plotly.min.js"
     if not target.exists() or target.read_text(encoding="utf-8") != text:
-        tmp = target.with_name(target.name + ".partial")
-        tmp.write_text(text, encoding="utf-8")
-        tmp.replace(target)
+        _write_atomic(target, text)
     return target
 
 
-def write_interactive(view: MapView, path, trajectory=None, box=None, max_voxels: int = 40_000,
+def _write_atomic(target: Path, text: str) -> None:
+    tmp = target.with_name(target.name + ".partial")
+    try:
+        tmp.write_text(text, encoding="utf-8")
+        tmp.replace(target)
+    finally:
+        tmp.unlink(missing_ok=True)
+
+
+def write_interactive(view: MapView, path, trajectory=None, box=None, max_voxels: int = 50_000,
                       title: str = "", js_path=None) -> dict:
     """Write the interactive view of :func:`interactive_figure` as a stand-alone offline HTML page.
 
     ``plotly.min.js`` is written beside ``path`` (once; or to ``js_path``, which the caller then
-    moves beside the page) and loaded from there by its name. Returns a summary: ``voxels``
+    moves beside the page; both are then written directly, as the caller's temporary names) and
+    loaded from there by its name. Returns a summary: ``voxels``
     (shown), ``factor`` (aggregation), ``faces``, ``bytes`` (page) and ``js_bytes``.
     """
     path = Path(path)
@@ -180,9 +191,10 @@ def write_interactive(view: MapView, path, trajectory=None, box=None, max_voxels
                        config=dict(displaylogo=False, scrollZoom=True, responsive=True))
     html = html.replace("<head>", "<head><title>3D semantic map</title>"
                         "<style>html,body{height:100%;margin:0}</style>", 1)
-    tmp = path.with_name(path.name + ".partial")
-    tmp.write_text(html, encoding="utf-8")
-    tmp.replace(path)
+    if js_path is not None:
+        path.write_text(html, encoding="utf-8")
+    else:
+        _write_atomic(path, html)
     faces = sum(len(t.i) for t in fig.data if t.type == "mesh3d") // 2
     return dict(voxels=fig.layout.meta["voxels"], factor=factor, faces=faces,
                 bytes=path.stat().st_size, js_bytes=js.stat().st_size)

@@ -3,8 +3,8 @@
 :class:`MapRecorder` writes, after each inserted scan, one ``visualization_msgs/msg/MarkerArray``
 on the topic ``/semantic_map`` -- as the reference node publishes it: one ``CUBE_LIST`` marker per
 class (namespace = class name, id = class index, ``scale`` = the voxel edge, the class colour),
-holding the centres of the occupied voxels of that class -- and one on ``/trajectory``: the
-sensor origins so far as a ``LINE_STRIP``. Markers are in the frame ``map`` (the world frame of
+holding the centres of the occupied voxels of that class -- and, from the second scan on, one on
+``/trajectory``: the sensor origins so far as a ``LINE_STRIP``. Markers are in the frame ``map`` (the world frame of
 the map: for SemanticKITTI the velodyne frame of scan 0, z up; metres). A class that had voxels
 before and has none now is removed with a ``DELETE`` action, so the map is always complete.
 
@@ -190,18 +190,22 @@ def trajectory_message(origins: np.ndarray, t_ns: int, width: float = 0.15) -> b
 class MapRecorder:
     """Write the map after each scan and the trajectory into an MCAP file (see the module doc).
 
-    Use as a context manager; :meth:`add` after each scan. The file is written under a temporary
-    name and renamed to ``path`` only when the recorder closes without an error.
+    Use as a context manager; :meth:`add` after each scan. With ``atomic`` (the default) the file
+    is written under a temporary name and renamed to ``path`` only when the recorder closes without
+    an error; on any error nothing is left. ``atomic=False`` writes ``path`` directly, for callers
+    that already write to a temporary name (:class:`hw4.atomic.Outputs`).
 
     Parameters
     ----------
     path : str or Path, the ``.mcap`` file
     rate : float [Hz], scans per second of the recording's clock (message times)
     t0_ns : int, time of the first scan [ns]
+    atomic : bool
     """
 
-    def __init__(self, path, rate: float = 10.0, t0_ns: int = 1_000_000_000):
+    def __init__(self, path, rate: float = 10.0, t0_ns: int = 1_000_000_000, atomic: bool = True):
         self.path = Path(path)
+        self.atomic = atomic
         self.rate, self.t0_ns = float(rate), int(t0_ns)
         self.count = 0
         self._origins: list = []
@@ -209,7 +213,7 @@ class MapRecorder:
 
     def __enter__(self) -> "MapRecorder":
         from mcap.writer import CompressionType, Writer
-        self._tmp = self.path.with_name(self.path.name + ".partial")
+        self._tmp = self.path.with_name(self.path.name + ".partial") if self.atomic else self.path
         self._file = open(self._tmp, "wb")
         self._writer = Writer(self._file, compression=CompressionType.ZSTD)
         self._writer.start(profile="ros2", library="hw4.bki.ros2_mcap")
@@ -225,21 +229,27 @@ class MapRecorder:
         t = self.t0_ns + int(round(self.count * 1e9 / self.rate))
         data, self._classes = map_message(view, t, self._classes)
         self._origins.append(np.asarray(origin, float))
-        for topic, payload in (("/semantic_map", data),
-                               ("/trajectory", trajectory_message(np.array(self._origins), t))):
+        topics = [("/semantic_map", data)]
+        if len(self._origins) > 1:  # a LINE_STRIP needs two points to be drawn
+            topics.append(("/trajectory", trajectory_message(np.array(self._origins), t)))
+        for topic, payload in topics:
             self._writer.add_message(channel_id=self._channels[topic], log_time=t, data=payload,
                                      publish_time=t, sequence=self.count)
         self.count += 1
 
     def __exit__(self, exc_type, exc, tb) -> None:
+        ok = False
         try:
-            self._writer.finish()
+            if exc_type is None:
+                self._writer.finish()
+                ok = True
         finally:
             self._file.close()
-        if exc_type is None:
-            self._tmp.replace(self.path)
-        else:
-            self._tmp.unlink(missing_ok=True)
+            if self.atomic:
+                if ok:
+                    self._tmp.replace(self.path)
+                else:
+                    self._tmp.unlink(missing_ok=True)
 
 
 def read_markers(path) -> list[tuple[str, int, dict]]:
