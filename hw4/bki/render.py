@@ -52,7 +52,7 @@ def camera_for(views, elev: float = 38.0, azim: float = -115.0, pad: float = 0.2
 
 def chase_camera(trajectory: np.ndarray, behind: float = 14.0, ahead: float = 26.0,
                  side: float = 16.0, below: float = 2.6, above: float = 4.0, elev: float = 28.0,
-                 zoom: float = 1.75) -> Camera:
+                 zoom: float = 1.5) -> Camera:
     """A camera behind and above the car, looking along its direction of travel (as an RViz view
     that follows the car): the box spans ``behind`` m before the first pose to ``ahead`` m past the
     last, ``side`` m either side and ``below``/``above`` m around the sensor height.
@@ -265,9 +265,12 @@ def plot_maps(views: dict, cam: Camera, colour: str = "class", which: str = "occ
     import matplotlib.pyplot as plt
     n = len(views)
     if fig is None:
-        fig = plt.figure(figsize=(width * n + (0.6 if colour == "variance" else 1.0), width * 0.8))
-        fig.subplots_adjust(left=0.0, right=0.92 if colour == "variance" else 0.88, bottom=0.04,
-                            top=0.94, wspace=0.05)
+        side = 0.8 if colour == "variance" else 1.45      # [in] for the colour bar or legend
+        tall = 1.0 if cam.persp else 0.8  # a zoomed view from the car reaches past its axes
+        fig = plt.figure(figsize=(width * n + side, width * tall))
+        fig.subplots_adjust(left=0.0, right=1 - side / (width * n + side),
+                            bottom=0.17 if cam.persp else 0.04, top=0.92 if cam.persp else 0.94,
+                            wspace=0.05)
     axes = []
     for i, (title, v) in enumerate(views.items()):
         ax = fig.add_subplot(1, n, i + 1, projection="3d")
@@ -276,7 +279,7 @@ def plot_maps(views: dict, cam: Camera, colour: str = "class", which: str = "occ
         draw_voxels(ax, v.centres[m], rgb, v.resolution, cam)
         if trajectory is not None:
             draw_trajectory(ax, trajectory)
-        ax.set_title(title, fontsize=10)
+        ax.set_title(title, fontsize=9.5)
         axes.append(ax)
     if colour == "variance":
         variance_colorbar(fig, axes, vmax, log=log_variance)
@@ -295,7 +298,7 @@ def variance_colorbar(fig, axes, vmax: float, log: bool = False):
 
 def _class_legend(fig, views, loc: str = "lower center", cam: Camera | None = None,
                   ncol: int | None = None, trajectory: bool = False) -> None:
-    """A legend of the classes shown (occupied voxels inside ``cam``'s box), 9 pt."""
+    """A legend of the classes shown (occupied voxels inside ``cam``'s box), 8.5 pt."""
     from matplotlib.lines import Line2D
     from matplotlib.patches import Patch
     from .palette import class_names
@@ -311,7 +314,7 @@ def _class_legend(fig, views, loc: str = "lower center", cam: Camera | None = No
                               mec="black", label="car trajectory"))
     if ncol is None:
         ncol = 1 if loc == "center right" else (min(len(handles), 6) or 1)
-    fig.legend(handles=handles, loc=loc, ncol=ncol, fontsize=9, frameon=False,
+    fig.legend(handles=handles, loc=loc, ncol=ncol, fontsize=8.5, frameon=False,
                handlelength=1.2, handletextpad=0.5, columnspacing=1.0)
 
 
@@ -343,7 +346,7 @@ def plot_topdown(views: dict, cam: Camera, colour: str = "class", which: str = "
                            interpolation="nearest")
         if trajectory is not None:
             draw_trajectory(ax, trajectory)
-        ax.set_title(title, fontsize=10)
+        ax.set_title(title, fontsize=9.5)
         ax.set_xlabel("x [m]")
         ax.set_ylabel("y [m]")
         ax.set_aspect("equal")
@@ -389,7 +392,7 @@ def plot_slices(panels: dict, z: float, cam: Camera, width: float = 4.0):
     for ax, (title, (v, which)) in zip(axes[0], panels.items()):
         rgb, ext = state_slice(v, z, which, lo=cam.lo[:2], hi=cam.hi[:2])
         ax.imshow(rgb, origin="lower", extent=ext, interpolation="nearest")
-        ax.set_title(title, fontsize=10)
+        ax.set_title(title, fontsize=9.5)
         ax.set_xlabel("x [m]")
         ax.set_ylabel("y [m]")
     from .palette import class_names
@@ -400,13 +403,13 @@ def plot_slices(panels: dict, z: float, cam: Camera, width: float = 4.0):
     handles += [Patch(facecolor="white", edgecolor="0.3", label="free"),
                 Patch(color="0.5", label="unknown (variance > var_thresh)"),
                 Patch(color="0.85", label="no evidence")]
-    fig.legend(handles=handles, loc="outside lower center", ncol=len(handles), fontsize=8,
+    fig.legend(handles=handles, loc="outside lower center", ncol=min(len(handles), 4), fontsize=8.5,
                frameon=False)
     return fig
 
 
 def mapping_video(view_groups, cam: Camera, titles, gif=None, mp4=None, strip=None,
-                  strip_scans=None, width: float = 4.0, dpi: int = 75, fps: float = 2.0,
+                  strip_scans=None, width: float = 4.0, dpi: int = 120, fps: float = 2.0,
                   trajectory=None) -> list:
     """Render the map after each scan (methods side by side) and write GIF, MP4 and a PNG strip.
 
