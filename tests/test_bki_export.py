@@ -185,3 +185,12 @@ def test_bki_cli_writes_mcap_and_interactive_page_whole(tmp_path, capsys):
     assert main(argv) == 2
     assert "already exists" in capsys.readouterr().err
     assert main(argv + ["--force"]) == 0
+
+
+def test_standalone_bki_usage_error_is_one_line(capsys):
+    from hw4.bki.cli import main as bki_main
+    with pytest.raises(SystemExit) as e:
+        bki_main(["--scans", "many"])
+    assert e.value.code == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and err[0].startswith("error: python -m hw4.bki:")

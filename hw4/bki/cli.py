@@ -219,8 +219,9 @@ def _map_and_write(args, cfg, loaders, out, o) -> int:
 
 def main(argv=None) -> int:
     """Stand-alone entry point (``python -m hw4.bki``)."""
-    parser = argparse.ArgumentParser(prog="python -m hw4.bki", description=DESCRIPTION, epilog=EPILOG,
-                                     formatter_class=argparse.RawDescriptionHelpFormatter)
+    from ..__main__ import _Parser  # usage errors in one line, as python -m hw4 prints them
+    parser = _Parser(prog="python -m hw4.bki", description=DESCRIPTION, epilog=EPILOG,
+                     formatter_class=argparse.RawDescriptionHelpFormatter)
     add_arguments(parser)
     args = parser.parse_args(argv)
     try:
