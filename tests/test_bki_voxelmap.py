@@ -12,13 +12,15 @@ from hw4.bki import VoxelMap
 from hw4.bki.voxelmap import FREE, OCCUPIED, UNKNOWN, kernel_reach
 from hw4.kernel import sparse_kernel
 from hw4.kernel import sparse_kernel_inside as fast_kernel
+from hw4.kernel import sparse_kernel_pieces
 
 SF2, ELL = 10.0, 0.3
 
 
-def test_kernel_values_shape_and_support():
+@pytest.mark.parametrize("kernel", [fast_kernel, sparse_kernel_pieces], ids=["closed-form", "pieces"])
+def test_kernel_values_shape_and_support(kernel):
     d = np.linspace(0, ELL * (1 - 1e-12), 2001)
-    k = fast_kernel(d.copy(), SF2, ELL)
+    k = kernel(d.copy(), SF2, ELL)
     np.testing.assert_allclose(k, sparse_kernel(d, sigma0=SF2, l=ELL).clip(0), rtol=0, atol=1e-12)
     np.testing.assert_allclose(k, [literal_kernel(x, SF2, ELL) for x in d], rtol=0, atol=1e-12)
     assert k[0] == pytest.approx(SF2)
@@ -26,7 +28,25 @@ def test_kernel_values_shape_and_support():
     assert np.all(k >= 0) and k[-1] < 1e-9             # reaches 0 at ell, never negative
     assert literal_kernel(ELL, SF2, ELL) == 0.0
     # at half the length scale: sf2 * (2 + cos(pi)) * 0.5 / 3 = sf2 / 6
-    assert fast_kernel(np.array([ELL / 2]), SF2, ELL)[0] == pytest.approx(SF2 / 6)
+    assert kernel(np.array([ELL / 2]), SF2, ELL)[0] == pytest.approx(SF2 / 6)
+
+
+@pytest.mark.parametrize("ell", [0.05, 0.3, 1.0, 7.0])
+def test_kernel_pieces_agree_with_the_closed_form(ell):
+    """The table of pieces against math.cos / math.sin: everywhere (random, piece boundaries and
+    their neighbours, just below ell) within a few units in the last place of sigma0."""
+    rng = np.random.default_rng(5)
+    edges = np.arange(1024) / 1024 * ell
+    d = np.concatenate([rng.random(20000) * ell, edges, np.nextafter(edges, ell),
+                        np.nextafter(edges[1:], 0), [np.nextafter(ell, 0), 0.0]])
+    d = d[d < ell]
+    got = sparse_kernel_pieces(d, SF2, ell)
+    want = np.array([literal_kernel(x, SF2, ell) for x in d])
+    assert np.abs(got - want).max() <= 4e-15 * SF2
+    assert np.all(got >= 0.0)
+    d0 = d.copy()
+    sparse_kernel_pieces(d, SF2, ell)
+    assert np.array_equal(d, d0)                                    # input left as it was
 
 
 @pytest.mark.parametrize("res, ell", [(0.1, 0.3), (0.3, 0.3), (0.2, 0.5), (0.25, 0.1)])

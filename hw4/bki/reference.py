@@ -32,7 +32,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..errors import InputError
-from ..kernel import sparse_kernel_inside
+from ..kernel import sparse_kernel_pieces
 from .voxelmap import MapView, VoxelMap, kernel_reach, posterior_view
 
 FRAMES = ("velodyne", "reference")
@@ -181,7 +181,7 @@ def missed_pairs(points: np.ndarray, labels: np.ndarray, resolution: float, ell:
         n, j = np.nonzero(near & (diff.sum(axis=2) >= 2))
         out_v.append(vox[n, j])
         out_c.append(labels[sel][n])
-        out_w.append(sparse_kernel_inside(d[n, j], sf2, ell))
+        out_w.append(sparse_kernel_pieces(d[n, j], sf2, ell))
     if not out_v:
         return np.zeros((0, 3), np.int64), np.zeros(0, np.int64), np.zeros(0), 0.0
     return np.concatenate(out_v), np.concatenate(out_c), np.concatenate(out_w), total
@@ -195,7 +195,7 @@ def _kernel_total(points, resolution, ell, sf2, offs) -> float:
         p = points[s:s + step]
         c = (np.floor(p / resolution)[:, None, :] + offs[None] + 0.5) * resolution
         d = np.linalg.norm(p[:, None, :] - c, axis=2)
-        total += float(sparse_kernel_inside(d[d < ell], sf2, ell).sum())
+        total += float(sparse_kernel_pieces(d[d < ell], sf2, ell).sum())
     return total
 
 
@@ -277,7 +277,11 @@ class FaceNeighbourMap:
             raise AssertionError("a missed kernel pair has no voxel in the full map")
         sub = np.bincount(pos * K + np.concatenate(self._cls), weights=np.concatenate(self._w),
                           minlength=len(keys) * K).reshape(-1, K)
-        alpha = np.maximum(v.alpha - sub, self.map.prior)
+        # what is left once the missed pairs are taken out; rounding residues (the two sums
+        # run in different orders) are zero
+        left = v.alpha - self.map.prior - sub
+        left[left < 1e-12 * self.map.sf2] = 0.0
+        alpha = self.map.prior + left
         return _posterior(v, alpha, self.map.var_thresh)
 
 

@@ -7,7 +7,8 @@ the ``K`` classes (0 = free), where ``e_k`` is the evidence gathered from traini
 * **S-BKI** (semantic Bayesian kernel inference): every training point of class ``k`` adds
   ``k(d)`` to ``e_k`` of *every* voxel whose centre lies at distance ``d < ell`` from it, with the
   sparse kernel ``k(d) = sf2 [(2 + cos(2 pi d / ell))(1 - d / ell) / 3 + sin(2 pi d / ell) / (2 pi)]``
-  (:func:`hw4.kernel.sparse_kernel`, clamped at 0 against rounding just below ``ell``).
+  (evaluated by :func:`hw4.kernel.sparse_kernel_pieces`, which agrees with the closed form
+  :func:`hw4.kernel.sparse_kernel` to rounding, clamped at 0 just below ``ell``).
 * **S-CSM** (semantic counting sensor model): every training point adds 1 to ``e_k`` of the one
   voxel that contains it.
 
@@ -16,8 +17,9 @@ the keys of the blocks seen so far maps each block to a row of a table that hold
 block, the slot of its evidence in a pool with one row per voxel with evidence (``-1``: none yet).
 Table and pool grow (by half their size at a time) with the observed volume, never with a bounding
 box, and empty voxels cost 4 bytes. Updates are vectorised over all (training point, voxel) pairs
-of a scan, generated in cache-sized chunks of points, and summed in a fixed order (point by point,
-offsets in lexicographic order), so the result is deterministic and independent of thread count.
+of a scan, generated in cache-sized chunks of points, and summed in a fixed order (chunk by chunk;
+in a chunk, offset by offset in lexicographic order, point by point), so the result is
+deterministic and independent of thread count.
 """
 from __future__ import annotations
 
@@ -28,7 +30,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import InputError
-from ..kernel import sparse_kernel_inside
+from ..kernel import sparse_kernel_pieces
 
 B = 4                    # block edge [voxels]
 B3 = B ** 3
@@ -218,8 +220,8 @@ class VoxelMap:
         """All (training point, voxel) pairs with centre distance < ell: keys and weights.
 
         The key of a pair is ``class << shift | code``, where ``code`` is the raveled index of its
-        voxel in the scan's box (origin ``lo``, strides ``stride``). Pairs come point by point, per
-        point in lexicographic offset order. Per point and axis only a window of ``W`` consecutive
+        voxel in the scan's box (origin ``lo``, strides ``stride``). Pairs come chunk by chunk of
+        points; in a chunk, window offset by offset (lexicographic), point by point. Per point and axis only a window of ``W`` consecutive
         offsets is tried, starting at the first whose centre lies within ``ell`` along that axis
         alone: an offset outside ``ell`` on one axis is outside in 3D, and along an axis those
         within form a run (the centres are monotone in the offset, so the squared distance falls,
@@ -260,11 +262,11 @@ class VoxelMap:
                 g = gather[(n, W)] = ((np.arange(3)[:, None] * (2 * m) + j) * n)[:, :, None] + np.arange(n)
             sqw = sq.reshape(-1)[g + (first * n)[:, None, :]]               # (3, W, n)
             d2 = (sqw[0][:, None, None, :] + sqw[1][None, :, None, :]) + sqw[2][None, None, :, :]
-            d2 = np.ascontiguousarray(d2.reshape(-1, n).T).reshape(-1)      # point-major
+            d2 = d2.reshape(-1)                                             # offset-major
             idx = np.flatnonzero(d2 < ell2)
             pk = point_key[s:s + step] + ((b + first) * col_stride).sum(axis=0)  # window corner
-            key = (pk[:, None] + offs[W]).reshape(-1)[idx]
-            return key, sparse_kernel_inside(np.sqrt(d2[idx]), sf2, ell)
+            key = (offs[W][:, None] + pk).reshape(-1)[idx]
+            return key, sparse_kernel_pieces(np.sqrt(d2[idx]), sf2, ell)
 
         starts = range(0, len(points), step)
         if THREADS > 1 and len(starts) > 1 and nominal >= 3:  # thin windows: too little work per call
@@ -286,7 +288,7 @@ class VoxelMap:
         K = self.num_class
         if K << shift <= min(_MAX_DIRECT, 2 * len(key)):  # small box: straight into (class, voxel) bins
             full = np.bincount(key, weights=w, minlength=K << shift).reshape(K, -1)
-            cnt = np.bincount(key, minlength=K << shift).reshape(K, -1).sum(axis=0)
+            cnt = np.bincount(key & ((1 << shift) - 1), minlength=n_box)
             vt = np.flatnonzero(cnt)                   # touched voxels, raveled box order
             add, cnt = full[:, vt].T, cnt[vt]
         else:                          # compact the touched voxels first
@@ -302,8 +304,17 @@ class VoxelMap:
             cnt = np.bincount(vr, minlength=V)
         vox = np.column_stack(np.unravel_index(vt, tuple(int(x) for x in dims))) + lo
         local = (vox & (B - 1)) @ np.array([B * B, B, 1], np.int64)
-        tkeys, inv = np.unique(_pack(vox >> _SHIFT), return_inverse=True)
-        rows = self._rows_for(tkeys)[inv]              # may grow the table
+        # the blocks of the touched voxels, sorted by key: marked in the scan's box of blocks
+        blo = lo >> _SHIFT
+        bdims = tuple(int(x) for x in ((lo + dims - 1) >> _SHIFT) - blo + 1)
+        bcode = np.ravel_multi_index(tuple(((vox >> _SHIFT) - blo).T), bdims)
+        present = np.zeros(int(np.prod(bdims)), bool)
+        present[bcode] = True
+        ub = np.flatnonzero(present)                   # raveled (x, y, z) order = key order
+        brank = np.empty(len(present), np.int64)
+        brank[ub] = np.arange(len(ub))
+        tkeys = _pack(np.column_stack(np.unravel_index(ub, bdims)) + blo)
+        rows = self._rows_for(tkeys)[brank[bcode]]     # may grow the table
         slots = self.table[rows, local].astype(np.int64)
         new = slots < 0
         n_new = int(new.sum())
