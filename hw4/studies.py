@@ -220,3 +220,48 @@ def free_sample_study(grid_size: float = 0.135, task: int = 4, variants=FREE_VAR
     boot = ev.bootstrap_scores([maps[k] for k, *_ in variants], split.samples, n_boot, seed) \
         if n_boot else None
     return rows, maps, boot
+
+
+FREE_WEIGHTS = (1.0, 0.5, 0.25, 0.1, 0.05, 0.025, 0.01)  # free-evidence factors tried by tune_free_weight
+
+
+def tune_free_weight(grid_size: float = 0.135, factors=FREE_WEIGHTS,
+                     split: ev.Split | None = None, every: int = 10, offset: int = 4,
+                     metric: str = "miou_all") -> tuple:
+    """Choose the free-evidence factor of the continuous S-CSM on validation scans, not test scans.
+
+    As :func:`hw4.evaluate.tuned_logodds` does for the log-odds baseline: from the *mapping*
+    scans of ``split`` (the held-out test scans are never seen here) one scan in ``every`` (index
+    ``offset`` mod ``every``) is set aside for validation; the evidence is counted once from the
+    rest (the package's free samples), its free column multiplied by each factor, and each map
+    scored on the validation scans' samples (same step and margin as the split) by ``metric``:
+    a score of :func:`hw4.evaluate.score_map`, or ``miou_all`` (default), the mean IoU over the
+    six regions *and* free space from the whole confusion matrix, so that free points called a
+    region count against it (the end-point ``miou`` alone only rises as the free weight goes to
+    zero). Ties keep the first factor in ``factors``.
+
+    Returns
+    -------
+    (best, rows): the chosen factor (float) and one dict per factor (``factor``, ``n_val`` scans,
+    ``n_fit`` scans, ``miou_all`` and the validation scores, without ROC curves).
+    """
+    split = split or ev.intel_split()
+    data = ev.mapping_data(4, split)
+    idx = np.arange(len(data.scans))
+    val = idx % every == offset
+    fit, held = ev.subset(data, idx[~val]), ev.subset(data, idx[val])
+    samples = ev.held_out_samples(held, np.arange(len(held.scans)), split.samples.step,
+                                  split.samples.margin)
+    grid = Grid(grid_size, n_classes=ev.N_LABELS + 1)
+    base = count_evidence(grid, fit.poses, fit.scans, model="continuous", semantic=True)
+    rows = []
+    for factor in factors:
+        counts = base.copy()
+        counts[:, -1] *= factor
+        row = {"factor": float(factor), "n_fit": int((~val).sum()), "n_val": int(val.sum())}
+        row.update(ev.score_map(map_from_counts(grid, counts, True), samples, keep_roc=False))
+        row["miou_all"] = float(np.nanmean(ev.iou_from_confusion(row["confusion"],
+                                                                  np.arange(ev.N_LABELS + 1))))
+        rows.append(row)
+    best = max(rows, key=lambda r: r[metric])   # max keeps the first of equal scores
+    return best["factor"], rows
