@@ -365,7 +365,8 @@ def score_map(m, samples: HeldOut, keep_roc: bool = True) -> dict:
 BOOT_METRICS = ("auc", "occupied_recall", "accuracy", "miou")
 
 
-def bootstrap_scores(maps, samples: HeldOut, n_boot: int = 200, seed: int = 0) -> dict:
+def bootstrap_scores(maps, samples: HeldOut, n_boot: int = 200, seed: int = 0,
+                     common: bool = True) -> dict:
     """Scores of several maps under resampling of the held-out *scans* (paired, seeded).
 
     Samples from one scan are strongly correlated, so the unit of resampling is the scan: each
@@ -386,39 +387,48 @@ def bootstrap_scores(maps, samples: HeldOut, n_boot: int = 200, seed: int = 0) -
         Replicates.
     seed : int
         Seed of ``numpy.random.default_rng``: the result is reproducible.
+    common : bool
+        True (default): every map is scored on the samples all of them observe. False: each map
+        on the samples it observes itself, as :func:`score_map` scores it (the estimates then
+        equal :func:`score_map`'s); the scan draws are still shared, so differences stay paired.
 
     Returns
     -------
-    dict with, per metric, the estimate on the common samples (n_maps,) under the metric's name
-    and its replicates (n_boot, n_maps) under ``"<metric>_replicates"``; ``replicates`` is an
-    alias of ``auc_replicates``; ``n_common`` (samples scored by every map).
+    dict with, per metric, the estimate (n_maps,) under the metric's name and its replicates
+    (n_boot, n_maps) under ``"<metric>_replicates"``; ``replicates`` is an alias of
+    ``auc_replicates``; ``n_common`` (samples scored by every map).
     """
     cells = [m.grid.nearest_cell(samples.points) for m in maps]
-    common = np.ones(len(samples.points), dtype=bool)
+    scored = []
     for m, c in zip(maps, cells):
         ok = c >= 0
         ok[ok] = np.asarray(m.observed, bool).reshape(-1)[c[ok]]
-        common &= ok
-    positive = samples.occupied[common]
-    scans, scan_idx = np.unique(samples.scan[common], return_inverse=True)
+        scored.append(ok)
+    shared = np.logical_and.reduce(scored)
+    # the samples resampled (``use``) and, within them, those each map is scored on
+    use = shared if common else np.logical_or.reduce(scored)
+    subsets = [np.flatnonzero(shared[use] if common else ok[use]) for ok in scored]
+    scans, scan_idx = np.unique(samples.scan[use], return_inverse=True)
     k = N_LABELS + 1
     prepared = []
-    for m, c in zip(maps, cells):
-        s = occupancy_score(m)[c[common]]
+    for m, c, sub in zip(maps, cells, subsets):
+        mine = np.flatnonzero(use)[sub]
+        s = occupancy_score(m)[c[mine]]
         order = np.argsort(-s, kind="stable")
         ss = s[order]
         start = np.flatnonzero(np.r_[True, ss[1:] != ss[:-1]])
         if getattr(m, "semantic", False):
-            pred = most_likely_class(np.asarray(m.map["alpha"]))[c[common]]
+            pred = most_likely_class(np.asarray(m.map["alpha"]))[c[mine]]
             called = pred != N_LABELS
-            codes = samples.truth_class[common] * k + pred
+            codes = samples.truth_class[mine] * k + pred
         else:
             thr = 0.0 if getattr(m, "logodds", None) is not None else 0.5
             called, codes = s > thr, None
-        prepared.append((order, start, called, codes))
+        prepared.append((sub, samples.occupied[mine], order, start, called, codes))
 
     def weighted(prep, w):
-        order, start, called, codes = prep
+        sub, positive, order, start, called, codes = prep
+        w = w[sub]
         wp = np.add.reduceat((w * positive)[order], start)
         wn = np.add.reduceat((w * ~positive)[order], start)
         above = np.cumsum(wn) - wn
@@ -436,14 +446,14 @@ def bootstrap_scores(maps, samples: HeldOut, n_boot: int = 200, seed: int = 0) -
         return out
 
     rng = np.random.default_rng(seed)
-    one = np.ones(len(positive))
+    one = np.ones(int(use.sum()))
     base = np.array([weighted(p, one) for p in prepared])          # (n_maps, n_metrics)
     reps = np.empty((n_boot, len(maps), len(BOOT_METRICS)))
     for b in range(n_boot):
         draw = np.bincount(rng.integers(0, len(scans), len(scans)), minlength=len(scans))
         w = draw[scan_idx].astype(float)
         reps[b] = [weighted(p, w) for p in prepared]
-    out = {"n_common": int(common.sum()), "n_boot": int(n_boot), "seed": int(seed)}
+    out = {"n_common": int(shared.sum()), "n_boot": int(n_boot), "seed": int(seed)}
     for i, name in enumerate(BOOT_METRICS):
         out[name] = base[:, i]
         out[f"{name}_replicates"] = reps[:, :, i]

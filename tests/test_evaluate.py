@@ -262,6 +262,27 @@ def test_bootstrap_without_resampling_weights_is_the_plain_auc():
     np.testing.assert_array_equal(b["replicates"], again["replicates"])
 
 
+def test_bootstrap_on_each_maps_own_samples_matches_score_map():
+    m1 = _toy_map([1, 1, 1, 1, 1, 0], [0.9, 0.2, 0.8, 0.1, 0.3, 0.99])
+    m2 = _toy_map([1, 1, 1, 1, 1, 1], [0.1, 0.2, 0.8, 0.1, 0.3, 0.5])
+    pts = np.array([[0, 0], [2, 0], [1, 0], [0, 1], [1.1, 1.2], [2, 1], [2.1, 0.9], [9, 9]])
+    occ = np.array([1, 1, 0, 0, 0, 1, 0, 1], bool)
+    s = ev.HeldOut(pts, occ, np.zeros(8, np.int64), np.array([0, 1, 2, 0, 1, 2, 0, 1]))
+    own = ev.bootstrap_scores([m1, m2], s, n_boot=30, seed=3, common=False)
+    shared = ev.bootstrap_scores([m1, m2], s, n_boot=30, seed=3)
+    assert own["n_common"] == shared["n_common"] == 5
+    for i, m in enumerate((m1, m2)):
+        r = ev.score_map(m, s, keep_roc=False)
+        assert own["auc"][i] == pytest.approx(r["auc"], abs=1e-12)
+        assert own["occupied_recall"][i] == pytest.approx(r["occupied_recall"], abs=1e-12)
+    # m2 also scores the sixth and seventh samples (in the cell m1 has not observed): 8/12, not 7/12
+    assert own["auc"][1] == pytest.approx(8 / 12) and shared["auc"][1] == pytest.approx(7 / 12)
+    assert own["auc"][0] == shared["auc"][0]
+    d = ev.paired_difference(own, 0, 1)
+    assert d["diff"] == pytest.approx(own["auc"][0] - own["auc"][1])
+    assert d["lo"] <= d["hi"]
+
+
 def test_binary_maps_read_at_one_half():
     m = _toy_map([1, 1, 1, 1, 1, 0], [0.9, 0.2, 0.5, 0.1, 0.6, 0.99])
     pts = np.array([[0, 0], [2, 0], [1, 0], [0, 1], [1, 1], [2, 1]])
