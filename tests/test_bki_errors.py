@@ -114,16 +114,25 @@ def test_cli_prints_one_sentence_and_exits_2(tmp_path, capsys):
 
 # --- checks added after review: config values, unit quaternion, empty map, outputs ---------------
 
-@pytest.mark.parametrize("text,msg", [
-    ('[map]\nresolution = "a"\n', "resolution in .* must be a finite number"),
-    ("[map]\nvar_thresh = -1.0\n", "var_thresh in .* must be positive"),
-    ('scans = "x"\n', "scans in .* must be an integer"),
-    ("[map]\nnum_class = true\n", "num_class in .* must be an integer"),
-    ("[map]\nnum_class = 1\n", "num_class in .* must be at least 2"),
+@pytest.mark.parametrize("content,msg", [
+    (b'[map]\nresolution = "a"\n', "resolution in .* must be a finite number"),
+    (b"[map]\nvar_thresh = -1.0\n", "var_thresh in .* must be positive"),
+    (b'scans = "x"\n', "scans in .* must be an integer"),
+    (b"[map]\nnum_class = true\n", "num_class in .* must be an integer"),
+    (b"[map]\nnum_class = 1\n", "num_class in .* must be at least 2"),
+    (b"[kernel]\nsf2 = 1e308\n", "sf2 in .* overflow"),              # would give NaN posteriors
+    (b"[kernel]\nprior = 1e308\n", "prior in .* overflow"),
+    (b"[kernel]\nprior = 1e-320\n", "prior in .* overflow"),
+    (b"[map]\nresolution = 0.1\n[kernel]\nresolution = 0.5\n",
+     r"sets resolution twice \(\[map\] and \[kernel\]\)"),
+    (b"[map]\nresolution = 0.1 # \xe9\n", "not a UTF-8 text file"),
+    (b"[map]\nresolution = 1e-20\n", "resolution in .* below 0.0001 m"),
+    (b"[map]\nnum_class = 1e9\n", "num_class in .* must be an integer"),
+    (b"[map]\nnum_class = 1000000000\n", "num_class in .* more than the 65536"),
 ])
-def test_config_values_are_checked(tmp_path, text, msg):
+def test_config_values_are_checked(tmp_path, content, msg):
     p = tmp_path / "c.toml"
-    p.write_text(text)
+    p.write_bytes(content)
     with pytest.raises(InputError, match=msg) as e:
         load_config(p)
     _one_sentence(e)

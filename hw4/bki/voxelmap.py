@@ -213,6 +213,9 @@ class VoxelMap:
             key = (labels << shift) + (base - lo) @ stride
             w = None  # weight 1 per point (counted exactly as integers)
         else:
+            # points in raveled voxel order: a chunk's pairs then land in few cache lines
+            order = np.argsort((base - lo) @ stride, kind="stable")
+            points, labels, base = points[order], labels[order], base[order]
             key, w = self._kernel_pairs(points, labels, base, lo, stride, shift, R)
         self._accumulate(key, w, shift, lo, dims)
 
