@@ -65,12 +65,43 @@ def put(name: str, value, glue=None):
     (glue or _glue())(name, plain(value), display=False)
 
 
-def put_interval(name: str, estimate, interval, glue=None):
-    """Glue an estimate and its interval as ``name``, ``name_lo`` and ``name_hi``."""
+def sci(value, digits: int = 1) -> str:
+    """A number as inline maths in powers of ten, e.g. 6.2e-05 -> ``$6.2 \\times 10^{-5}$``."""
+    m, e = f"{float(value):.{digits}e}".split("e")
+    return f"${m} \\times 10^{{{int(e)}}}$"
+
+
+def put_sci(name: str, value, digits: int = 1, glue=None):
+    """Glue ``value`` as Markdown maths (:func:`sci`) under ``name``, for ``{glue:md}``."""
+    if glue is None:
+        from IPython.display import Markdown
+        _glue()(name, Markdown(sci(value, digits)), display=False)
+    else:
+        glue(name, sci(value, digits), display=False)
+
+
+def signed_text(value, digits: int = 3) -> str:
+    """A signed number as text with a typographic minus (U+2212): ``+0.035``, ``\u22120.227``.
+
+    Glued by :func:`put` and printed by ``{glue:text}`name``` without a format (myst-nb strips
+    the quotes); a format spec such as ``:+.3f`` would print an ASCII hyphen for the minus.
+    """
+    return f"{float(value):+.{int(digits)}f}".replace("-", "\u2212")
+
+
+def put_interval(name: str, estimate, interval, glue=None, signed_digits: int | None = None):
+    """Glue an estimate and its interval as ``name``, ``name_lo`` and ``name_hi``.
+
+    With ``signed_digits`` also ``name_s``, ``name_lo_s`` and ``name_hi_s``: the three as
+    :func:`signed_text` with that many decimals (a minus sign, not a hyphen, in the prose).
+    """
     lo, hi = interval
     put(name, estimate, glue)
     put(f"{name}_lo", lo, glue)
     put(f"{name}_hi", hi, glue)
+    if signed_digits is not None:
+        for suffix, v in (("", estimate), ("_lo", lo), ("_hi", hi)):
+            put(f"{name}{suffix}_s", signed_text(v, signed_digits), glue)
 
 
 def best_seconds(task: int, grid_size: float, repeats: int = 3, **kw) -> float:

@@ -53,3 +53,12 @@ def test_zoom_sets_the_named_window():
     plt.close(fig)
     with pytest.raises(KeyError):
         book.zoom(ax, "nowhere")
+
+
+def test_put_interval_signed_text_uses_a_minus_sign():
+    got = {}
+    book.put_interval("d", -0.2268, (-0.269, 0.0125), signed_digits=3,
+                      glue=lambda name, value, display: got.__setitem__(name, value))
+    assert got["d"] == -0.2268 and got["d_lo"] == -0.269
+    assert [got[k] for k in ("d_s", "d_lo_s", "d_hi_s")] == ["\u22120.227", "\u22120.269", "+0.013"]
+    assert "-" not in got["d_s"]
