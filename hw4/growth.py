@@ -134,12 +134,19 @@ def write_mp4(frames, path, fps: int = 4) -> Path | None:
     return path
 
 
-def strip_figure(kept: dict, poses, ncols: int = 3):
-    """A grid of frames (the PDF's stand-in for the animation) from ``render_frames``' ``kept``."""
+def strip_figure(kept: dict, poses, ncols: int = 3, width: float = 7.0):
+    """A grid of frames (the PDF's stand-in for the animation) from ``render_frames``' ``kept``.
+
+    Drawn at its print size, ``width`` [in] wide (text 8.5-9 pt), with one legend below the
+    panels.
+    """
     ns = sorted(kept)
     nrows = int(np.ceil(len(ns) / ncols))
-    fig, axes = plt.subplots(nrows, ncols, figsize=(3.3 * ncols, 3.3 * nrows),
-                             constrained_layout=True, sharex=True, sharey=True)
+    grid0 = kept[ns[0]][0]
+    aspect = np.ptp(grid0.y) / max(np.ptp(grid0.x), 1e-9)
+    height = nrows * (width / ncols) * aspect + 0.75   # + the legend row
+    fig, axes = plt.subplots(nrows, ncols, figsize=(width, height), layout="constrained",
+                             sharex=True, sharey=True)
     axes = np.atleast_1d(axes).reshape(-1)
     for ax, n in zip(axes, ns):
         grid, counts = kept[n]
@@ -147,7 +154,12 @@ def strip_figure(kept: dict, poses, ncols: int = 3):
         ax.label_outer()
     for ax in axes[len(ns):]:
         ax.axis("off")
-    plotting.class_legend(axes[0], loc="upper left")
+    from matplotlib.patches import Patch
+    handles = [Patch(color=plotting.CLASS_COLORS[i], label=plotting.CLASS_NAMES[i])
+               for i in range(6)]
+    handles += [Patch(facecolor=plotting.FREE_COLOR, edgecolor="0.6", label="free"),
+                Patch(color=plotting.UNKNOWN_COLOR, label="unknown")]
+    fig.legend(handles=handles, loc="outside lower center", ncol=4, frameon=False, fontsize=8.5)
     return fig
 
 
