@@ -74,23 +74,26 @@ def roc_figure(rows, grid_sizes=None, zoom: float | None = 0.2, width: float = 7
     return fig
 
 
-def plot_confusion(cm, ax=None, title=None, normalize: bool = True, colorbar: bool = True):
+def plot_confusion(cm, ax=None, title=None, normalize: bool = True, colorbar: bool = True,
+                   fontsize: float = 9.5):
     """Confusion matrix of a semantic map: rows true class (six regions, then free), columns predicted.
 
     With ``normalize`` every row is divided by its total (the share of each true class's samples
-    that went to each predicted class) and annotated in percent.
+    that went to each predicted class) and shown, annotated and colour-barred in percent (0-100).
+    ``fontsize`` [pt] of the cell numbers at the figure's own size (the book draws figures at
+    print size, so 9.5 pt stays above 8 pt in the PDF).
     """
     cm = np.asarray(cm, dtype=float)
     names = list(CLASS_NAMES[: len(cm) - 1]) + ["free"]
-    show = cm / np.maximum(cm.sum(axis=1, keepdims=True), 1) if normalize else cm
+    show = 100 * cm / np.maximum(cm.sum(axis=1, keepdims=True), 1) if normalize else cm
     ax = _new(ax, figsize=(5.6, 4.8))
-    im = ax.imshow(show, cmap="Blues", vmin=0, vmax=1 if normalize else None)
+    im = ax.imshow(show, cmap="Blues", vmin=0, vmax=100 if normalize else None)
     for i in range(len(cm)):
         for j in range(len(cm)):
             v = show[i, j]
-            txt = f"{100 * v:.0f}" if normalize else f"{int(cm[i, j])}"
-            ax.text(j, i, txt, ha="center", va="center", fontsize=8,
-                    color="white" if (normalize and v > 0.5) else "black")
+            txt = f"{v:.0f}" if normalize else f"{int(cm[i, j])}"
+            ax.text(j, i, txt, ha="center", va="center", fontsize=fontsize,
+                    color="white" if (normalize and v > 50) else "black")
     ax.set_xticks(range(len(cm)), names, rotation=45, ha="right")
     ax.set_yticks(range(len(cm)), names)
     ax.set_xlabel("predicted class (most likely)")
@@ -98,7 +101,8 @@ def plot_confusion(cm, ax=None, title=None, normalize: bool = True, colorbar: bo
     if title:
         ax.set_title(title)
     if colorbar:
-        ax.figure.colorbar(im, ax=ax, shrink=0.8, label="share of row" if normalize else "samples")
+        ax.figure.colorbar(im, ax=ax, shrink=0.8,
+                           label="share of row [%]" if normalize else "samples")
     return im
 
 
