@@ -20,6 +20,7 @@ FREE_COLOR = np.array([1.0, 1.0, 1.0])
 UNKNOWN_COLOR = np.array([0.5, 0.5, 0.5])
 VARIANCE_CMAP = "viridis"
 OCCUPANCY_CMAP = "gray_r"
+UNOBSERVED_LIGHT = "#c6dbef"   # pale blue for cells without evidence (plot_mean(unobserved=...))
 
 
 def style():
@@ -52,11 +53,22 @@ def _new(ax):
     return ax
 
 
-def plot_mean(ogm, ax=None, title=None, colorbar=True):
-    """Occupancy probability E[theta] of a binary map: white free, black occupied, grey unknown."""
+def plot_mean(ogm, ax=None, title=None, colorbar=True, unobserved=None):
+    """Occupancy probability E[theta] of a binary map: white free, black occupied, grey unknown.
+
+    ``unobserved``: a matplotlib colour for the cells without evidence (prior excluded) instead
+    of the prior's grey, e.g. :data:`UNOBSERVED_LIGHT`, so that black walls stand out against
+    the unexplored area.
+    """
     ax = _new(ax)
-    im = ax.imshow(ogm.grid.to_image(ogm.map["mean"]), origin="lower", extent=_extent(ogm.grid),
+    extent = _extent(ogm.grid)
+    im = ax.imshow(ogm.grid.to_image(ogm.map["mean"]), origin="lower", extent=extent,
                    cmap=OCCUPANCY_CMAP, vmin=0, vmax=1)
+    if unobserved is not None:
+        empty = ogm.grid.to_image(np.asarray(ogm.counts).sum(axis=1) == 0)
+        overlay = np.zeros(empty.shape + (4,))
+        overlay[empty] = mpl.colors.to_rgba(unobserved)
+        ax.imshow(overlay, origin="lower", extent=extent)
     _axes(ax, ogm.grid, title)
     if colorbar:
         ax.figure.colorbar(im, ax=ax, shrink=0.8, label="P(occupied)")
