@@ -114,10 +114,19 @@ def draw_voxels(ax, centres: np.ndarray, rgb: np.ndarray, resolution: float, cam
     ax.set_box_aspect(np.array(cam.hi) - np.array(cam.lo), zoom=cam.zoom)
     if cam.persp:
         ax.set_proj_type("persp", focal_length=0.5)
+    from matplotlib.ticker import MaxNLocator
     ax.set_xlabel("x [m]", labelpad=-6)
     ax.set_ylabel("y [m]", labelpad=-6)
-    ax.set_zlabel("z [m]", labelpad=-10)
+    ax.set_zlabel("z [m]", labelpad=-5)
     ax.tick_params(labelsize=8, pad=-2)
+    # the z extent is short on the page: three ticks at most, so that labels do not collide
+    ax.zaxis.set_major_locator(MaxNLocator(nbins=2, steps=[1, 2, 5, 10]))
+    ax.tick_params(axis="z", pad=1)
+    if cam.persp:   # seen from behind the car the z axis is end-on: no z ticks, x labels off the box
+        ax.set_zticks([])
+        ax.set_zlabel("")
+        ax.tick_params(axis="x", pad=3)
+        ax.set_xlabel("x [m]", labelpad=4)
     if len(centres) == 0:
         return
     idx = np.floor(centres / resolution).astype(np.int64)
@@ -245,7 +254,7 @@ def draw_trajectory(ax, trajectory: np.ndarray, lift: float = 0.3) -> None:
 
 def plot_maps(views: dict, cam: Camera, colour: str = "class", which: str = "occupied",
               vmax: float = 0.09, width: float = 5.0, fig=None, trajectory=None,
-              legend_cols: int = 1, log_variance: bool = False):
+              legend_cols: int = 1, log_variance: bool = False, legend: str = "right"):
     """3D voxel renders of several maps side by side, all seen from the same camera.
 
     Parameters
@@ -261,16 +270,31 @@ def plot_maps(views: dict, cam: Camera, colour: str = "class", which: str = "occ
         Sensor origins, drawn as the car's path.
     legend_cols : int, columns of the class legend
     log_variance : bool, logarithmic variance scale (see :func:`variance_norm`)
+    legend : {"right", "below"}
+        Where the class legend goes. ``"below"`` (for print) keeps the figure ``width * n`` wide:
+        the legend runs under the panels, and a variance colour bar takes its width from them.
     """
     import matplotlib.pyplot as plt
     n = len(views)
+    below = legend == "below"
     if fig is None:
-        side = 0.8 if colour == "variance" else 1.45      # [in] for the colour bar or legend
         tall = 1.0 if cam.persp else 0.8  # a zoomed view from the car reaches past its axes
-        fig = plt.figure(figsize=(width * n + side, width * tall))
-        fig.subplots_adjust(left=0.0, right=1 - side / (width * n + side),
-                            bottom=0.17 if cam.persp else 0.04, top=0.92 if cam.persp else 0.94,
-                            wspace=0.05)
+        if below:
+            tall = 0.85 if cam.persp else 0.8
+            side = 0.75 if colour == "variance" else 0.0
+            rows = 0 if colour == "variance" else 1 + (len(legend_handles(views, cam, trajectory is not None)) - 1) // 6
+            foot = 0.2 * rows + 0.25 * (rows > 0)             # [in] for the legend rows
+            w_total, h_total = width * n, (width * n - side) / n * tall + foot
+            fig = plt.figure(figsize=(w_total, h_total))
+            fig.subplots_adjust(left=0.0, right=1 - side / w_total,
+                                bottom=foot / h_total + (0.08 if cam.persp else 0.0),
+                                top=1.02 if cam.persp else 0.95, wspace=0.05)
+        else:
+            side = 0.8 if colour == "variance" else 1.45      # [in] for the colour bar or legend
+            fig = plt.figure(figsize=(width * n + side, width * tall))
+            fig.subplots_adjust(left=0.0, right=1 - side / (width * n + side),
+                                bottom=0.17 if cam.persp else 0.04, top=0.92 if cam.persp else 0.94,
+                                wspace=0.05)
     axes = []
     for i, (title, v) in enumerate(views.items()):
         ax = fig.add_subplot(1, n, i + 1, projection="3d")
@@ -282,23 +306,39 @@ def plot_maps(views: dict, cam: Camera, colour: str = "class", which: str = "occ
         ax.set_title(title, fontsize=9.5)
         axes.append(ax)
     if colour == "variance":
-        variance_colorbar(fig, axes, vmax, log=log_variance)
+        if below:
+            variance_colorbar(fig, axes, vmax, log=log_variance, cax=side_axis(fig, 0.55))
+        else:
+            variance_colorbar(fig, axes, vmax, log=log_variance)
+    elif below:
+        _class_legend(fig, views, loc="lower center", cam=cam, trajectory=trajectory is not None)
     else:
         _class_legend(fig, views, loc="center right", cam=cam, ncol=legend_cols,
                       trajectory=trajectory is not None)
     return fig
 
 
-def variance_colorbar(fig, axes, vmax: float, log: bool = False):
-    """A colour bar for variance colours (scale of :func:`variance_norm`) beside ``axes``."""
+def side_axis(fig, height: float, width: float = 0.12):
+    """An axis for a colour bar at the right edge of ``fig``, ``height`` of the figure's height
+    (centred on the panels' area) and ``width`` inch wide."""
+    fw, _ = fig.get_size_inches()
+    p = fig.subplotpars
+    mid, h = (p.bottom + p.top) / 2, height * (p.top - p.bottom)
+    return fig.add_axes([p.right + 0.06 / fw, mid - h / 2, width / fw, h])
+
+
+def variance_colorbar(fig, axes, vmax: float, log: bool = False, cax=None):
+    """A colour bar for variance colours (scale of :func:`variance_norm`) beside ``axes``
+    (or in ``cax``, an axis of its own)."""
     from matplotlib.cm import ScalarMappable
-    return fig.colorbar(ScalarMappable(variance_norm(vmax, log), "viridis"), ax=axes, shrink=0.6,
-                        pad=0.02, label="variance of the most likely class")
+    sm = ScalarMappable(variance_norm(vmax, log), "viridis")
+    if cax is not None:
+        return fig.colorbar(sm, cax=cax, label="variance of the\nmost likely class")
+    return fig.colorbar(sm, ax=axes, shrink=0.6, pad=0.02, label="variance of the most likely class")
 
 
-def _class_legend(fig, views, loc: str = "lower center", cam: Camera | None = None,
-                  ncol: int | None = None, trajectory: bool = False) -> None:
-    """A legend of the classes shown (occupied voxels inside ``cam``'s box), 8.5 pt."""
+def legend_handles(views, cam: Camera | None = None, trajectory: bool = False) -> list:
+    """Legend handles of the classes shown (occupied voxels inside ``cam``'s box) and the path."""
     from matplotlib.lines import Line2D
     from matplotlib.patches import Patch
     from .palette import class_names
@@ -312,6 +352,13 @@ def _class_legend(fig, views, loc: str = "lower center", cam: Camera | None = No
     if trajectory:
         handles.append(Line2D([], [], color="black", lw=1.6, marker="o", ms=3.2, mfc="white",
                               mec="black", label="car trajectory"))
+    return handles
+
+
+def _class_legend(fig, views, loc: str = "lower center", cam: Camera | None = None,
+                  ncol: int | None = None, trajectory: bool = False) -> None:
+    """A legend of the classes shown (occupied voxels inside ``cam``'s box), 8.5 pt."""
+    handles = legend_handles(views, cam, trajectory)
     if ncol is None:
         ncol = 1 if loc == "center right" else (min(len(handles), 6) or 1)
     fig.legend(handles=handles, loc=loc, ncol=ncol, fontsize=8.5, frameon=False,
@@ -350,8 +397,9 @@ def plot_topdown(views: dict, cam: Camera, colour: str = "class", which: str = "
         ax.set_xlabel("x [m]")
         ax.set_ylabel("y [m]")
         ax.set_aspect("equal")
-    if im is not None:
-        fig.colorbar(im, ax=axes[0].tolist(), shrink=0.8, label="variance of the most likely class")
+    if im is not None:   # a bar exactly as tall as the (aspect-locked) panel beside it
+        cax = axes[0, -1].inset_axes([1.04, 0.0, 0.045, 1.0])
+        fig.colorbar(im, cax=cax, label="variance of the\nmost likely class")
     else:
         _class_legend(fig, views, loc="outside lower center", cam=cam,
                       trajectory=trajectory is not None)
@@ -410,7 +458,7 @@ def plot_slices(panels: dict, z: float, cam: Camera, width: float = 4.0):
 
 def mapping_video(view_groups, cam: Camera, titles, gif=None, mp4=None, strip=None,
                   strip_scans=None, width: float = 4.0, dpi: int = 120, fps: float = 2.0,
-                  trajectory=None) -> list:
+                  trajectory=None, strip_width: float = 6.5) -> list:
     """Render the map after each scan (methods side by side) and write GIF, MP4 and a PNG strip.
 
     Parameters
@@ -422,6 +470,7 @@ def mapping_video(view_groups, cam: Camera, titles, gif=None, mp4=None, strip=No
         Where to write the animation (GIF, MP4) and a PNG of some frames stacked (for print).
     strip_scans : sequence of int, optional
         1-based scan numbers of the strip's frames (default: four evenly spaced, ending with the last).
+    strip_width : float [inch], width of the strip (:func:`plot_strip`), its print size
     trajectory : (T, 3) array [m], optional
         Sensor origins; frame ``i`` draws the path up to scan ``i``.
 
@@ -430,8 +479,10 @@ def mapping_video(view_groups, cam: Camera, titles, gif=None, mp4=None, strip=No
     list of (H, W, 3) uint8 frames
     """
     import matplotlib.pyplot as plt
-    frames = []
+    frames, kept = [], []
     for i, views in enumerate(view_groups):
+        keep = strip is not None and (strip_scans is None or i + 1 in strip_scans)
+        kept.append(views if keep else None)
         fig = plot_maps({f"{t}, scan {i + 1}": v for t, v in zip(titles, views)}, cam, width=width,
                         trajectory=None if trajectory is None else np.asarray(trajectory)[:i + 1])
         fig.set_dpi(dpi)
@@ -441,8 +492,90 @@ def mapping_video(view_groups, cam: Camera, titles, gif=None, mp4=None, strip=No
     if strip is not None:
         n = len(frames)
         picks = strip_scans or sorted({max(1, round(n * q)) for q in (0.25, 0.5, 0.75, 1.0)})
-        import imageio.v2 as imageio
-        gap = np.full((24,) + frames[0].shape[1:], 255, dtype=frames[0].dtype)  # white spacer
-        rows = [part for k in picks for part in (frames[k - 1], gap)][:-1]
-        imageio.imwrite(strip, np.vstack(rows))
+        fig = plot_strip([kept[k - 1] for k in picks], picks, cam, titles,
+                         trajectory=trajectory, width=strip_width)
+        save_png(fig, strip, dpi=200)
+        plt.close(fig)
     return frames
+
+
+def plot_strip(view_groups, scans, cam: Camera, titles, trajectory=None, width: float = 6.5):
+    """Some frames of the mapping video for print: one column per scan, one row per method (all
+    from ``cam``, without axes), ``width`` inch wide, with one class legend under all of them.
+
+    ``view_groups`` holds one tuple of MapView per column, ``scans`` the 1-based scan number of each.
+    """
+    import dataclasses
+    import matplotlib.pyplot as plt
+    cols, rows = len(view_groups), len(titles)
+    panel = width / cols * 0.8                  # [in] 3D axes draw in a square of the panel height
+    cam = dataclasses.replace(cam, zoom=min(cam.zoom, 1.15))   # so that the drawing fits it
+    last = {t: v for t, v in zip(titles, view_groups[-1])}
+    legend_rows = 1 + (len(legend_handles(last, cam, trajectory is not None)) - 1) // 6
+    head, foot = 0.22, 0.22 * legend_rows + 0.08
+    height = rows * panel + head + foot
+    fig = plt.figure(figsize=(width, height))
+    fig.subplots_adjust(left=0.04, right=1.0, bottom=foot / height, top=1 - head / height,
+                        wspace=0.0, hspace=0.0)
+    for c, (views, k) in enumerate(zip(view_groups, scans)):
+        for r, (title, v) in enumerate(zip(titles, views)):
+            ax = fig.add_subplot(rows, cols, r * cols + c + 1, projection="3d")
+            m = v.occupied & cam.inside(v.centres)
+            draw_voxels(ax, v.centres[m], class_rgb(v, m), v.resolution, cam)
+            if trajectory is not None:
+                draw_trajectory(ax, np.asarray(trajectory)[:k])
+            ax.set_axis_off()     # the axes are those of the full-size figures
+            if r == 0:
+                ax.set_title(f"scan {k}", fontsize=9, pad=0)
+            if c == 0:
+                ax.text2D(-0.02, 0.5, title, transform=ax.transAxes, rotation=90, ha="right",
+                          va="center", fontsize=9)
+    _class_legend(fig, last, loc="lower center", cam=cam, trajectory=trajectory is not None)
+    return fig
+
+
+def save_png(fig, path, dpi: int = 200) -> None:
+    """Write ``fig`` as a PNG of at most 256 colours (:func:`png_bytes`) to ``path``."""
+    Path(path).write_bytes(png_bytes(fig, dpi))
+
+
+def png_bytes(fig, dpi: int = 200, n_exact: int = 200) -> bytes:
+    """``fig`` as PNG bytes at ``dpi`` with a palette of 256 colours, without dithering.
+
+    The palette holds the ``n_exact`` most frequent colours exactly (the flat class colours of
+    faces and legend patches stay true) and fills the rest by maximum coverage (edges, gradients);
+    voxel renders hold few distinct colours, and the file is about a third of the RGB PNG's size.
+    """
+    import io
+    from PIL import Image
+    buf = io.BytesIO()
+    fig.savefig(buf, format="png", dpi=dpi)
+    img = Image.open(io.BytesIO(buf.getvalue())).convert("RGB")
+    a = np.asarray(img)
+    packed = (a[..., 0].astype(np.int64) << 16) | (a[..., 1].astype(np.int64) << 8) | a[..., 2]
+    vals, inverse, counts = np.unique(packed.ravel(), return_inverse=True, return_counts=True)
+    top = vals[np.argsort(-counts, kind="stable")[:n_exact]]
+    rest = 256 - len(top)
+    cover = img.quantize(rest, method=Image.Quantize.MAXCOVERAGE, dither=Image.Dither.NONE)
+    palette = np.vstack([np.column_stack([(top >> 16) & 255, (top >> 8) & 255, top & 255]),
+                         np.asarray(cover.getpalette()[:3 * rest]).reshape(-1, 3)]).astype(np.int64)
+    colours = np.column_stack([(vals >> 16) & 255, (vals >> 8) & 255, vals & 255])
+    nearest = np.empty(len(vals), np.uint8)       # each distinct colour to its nearest entry
+    for i in range(0, len(vals), 4096):
+        d = ((colours[i:i + 4096, None, :] - palette[None]) ** 2).sum(-1)
+        nearest[i:i + 4096] = d.argmin(1)
+    out_img = Image.fromarray(nearest[inverse].reshape(a.shape[:2]), mode="P")
+    out_img.putpalette(palette.astype(np.uint8).ravel().tolist())
+    out = io.BytesIO()
+    out_img.save(out, format="PNG", optimize=True)
+    return out.getvalue()
+
+
+def show(fig, dpi: int = 200):
+    """Display ``fig`` in a notebook as a palette PNG (:func:`png_bytes`) at ``dpi`` and close it:
+    print-size figures at print resolution, at a third of the stored size."""
+    import matplotlib.pyplot as plt
+    from IPython.display import Image, display
+    data = png_bytes(fig, dpi)
+    plt.close(fig)
+    display(Image(data=data, format="png"))
