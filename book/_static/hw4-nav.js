@@ -1,14 +1,23 @@
-/* Sidebar toggles that work at every width (sphinx-book-theme 1.3.0 with pydata-sphinx-theme 0.17.1).
+/* Navigation, figures and equations on every page of the HTML book
+ * (sphinx-book-theme 1.3.0 with pydata-sphinx-theme 0.17.1).
  *
- * Both themes wire only the first `.primary-toggle` / `.secondary-toggle` on the page
- * (document.querySelector), which since pydata-sphinx-theme 0.17 is the hidden navbar button:
- * the visible buttons in the article header do nothing, on phones and on desktops alike
- * (pydata/pydata-sphinx-theme#2451, executablebooks/sphinx-book-theme#988). Every other toggle
- * forwards its click to that first, wired one, which opens the drawer below 992 px and collapses
- * the primary sidebar above.
+ * 1. Sidebar toggles that work at every width. Both themes wire only the first `.primary-toggle` /
+ *    `.secondary-toggle` on the page (document.querySelector), which since pydata-sphinx-theme 0.17
+ *    is the hidden navbar button: the visible buttons in the article header do nothing, on phones
+ *    and on desktops alike (pydata/pydata-sphinx-theme#2451, executablebooks/sphinx-book-theme#988).
+ *    Every other toggle forwards its click to that first, wired one, which opens the drawer below
+ *    992 px and collapses the primary sidebar above.
+ * 2. A drawer closes when a link in it is followed: the chapter list's and the page contents'
+ *    (on a phone the page would otherwise jump behind a drawer that covers most of the screen).
+ * 3. Figures open their full-size file: each content image (notebook outputs, MyST figures) is
+ *    wrapped in a link to its own file, reachable with the keyboard; icons and logos are not.
+ * 4. A display equation wider than its column gets its number on the line below (hw4-book.css),
+ *    measured again when the window changes width; what is still wider scrolls in its own box.
  */
 (function () {
   "use strict";
+  var DRAWERS = ["pst-primary-sidebar-modal", "pst-secondary-sidebar-modal"];
+
   function forward(selector, dialogId) {
     var buttons = document.querySelectorAll(selector);
     var wired = buttons[0];
@@ -24,9 +33,107 @@
       });
     });
   }
+
+  function closeOnLink(dialogId) {
+    var dialog = document.getElementById(dialogId);
+    if (!dialog) {
+      return;
+    }
+    // Capture phase, before the link's default action. A link to another page: the drawer closes
+    // and the browser follows the link. A link to a section of this page: the jump waits until
+    // the drawer has closed, because on closing the theme gives the focus back to the button
+    // that opened it, and that focus() scrolls the page (by some 500 px on a phone) after the
+    // jump. Modified clicks (new tab or window) leave the drawer open.
+    dialog.addEventListener("click", function (event) {
+      var link = event.target.closest && event.target.closest("a[href]");
+      if (!link || !dialog.open || !dialog.contains(link)) {
+        return;
+      }
+      if (event.ctrlKey || event.metaKey || event.shiftKey || event.altKey || event.button > 0) {
+        return;
+      }
+      var here = link.hash && link.pathname === window.location.pathname &&
+        link.search === window.location.search;
+      var target = here && document.getElementById(decodeURIComponent(link.hash.slice(1)));
+      if (target) {
+        event.preventDefault();
+        dialog.addEventListener("close", function () {
+          // after the theme's own close listener (registered when the drawer opened)
+          if (window.location.hash === link.hash) {
+            target.scrollIntoView();
+          } else {
+            window.location.hash = link.hash;
+          }
+        }, {once: true});
+      }
+      dialog.close();
+    }, true);
+  }
+
+  function figureName(img) {
+    var figure = img.closest("figure");
+    var number = figure && figure.querySelector(".caption-number");
+    return number ? number.textContent.trim() : "figure";
+  }
+
+  function linkImages() {
+    var images = document.querySelectorAll(
+      ".bd-article figure img, .bd-article .cell_output img");
+    Array.prototype.forEach.call(images, function (img) {
+      var src = img.getAttribute("src");
+      // already a link, or inline data a browser will not open as a page
+      if (!src || /^data:/.test(src) || img.closest("a")) {
+        return;
+      }
+      var link = document.createElement("a");
+      link.className = "hw4-image-link";
+      link.href = src;
+      link.title = "Open the full-size image";
+      link.setAttribute("aria-label", "Open " + figureName(img) + " at full size");
+      img.parentNode.insertBefore(link, img);
+      link.appendChild(img);
+    });
+  }
+
+  function markWideMaths() {
+    var maths = document.querySelectorAll("div.math");
+    // Measure every equation with its number beside it first, then set the classes: no
+    // layout is forced between one equation's change and the next one's measurement.
+    Array.prototype.forEach.call(maths, function (div) {
+      div.classList.remove("hw4-math-wide");
+    });
+    var wide = Array.prototype.filter.call(maths, function (div) {
+      var box = div.querySelector("mjx-container");
+      return box && div.querySelector("span.eqno") && box.scrollWidth > box.clientWidth + 1;
+    });
+    wide.forEach(function (div) {
+      div.classList.add("hw4-math-wide");
+    });
+  }
+
+  function watchMaths() {
+    var mj = window.MathJax;
+    var ready = mj && mj.startup && mj.startup.promise ? mj.startup.promise : Promise.resolve();
+    var fonts = document.fonts && document.fonts.ready ? document.fonts.ready : Promise.resolve();
+    Promise.all([ready, fonts]).then(markWideMaths, function () {});
+    var width = window.innerWidth;
+    var timer = null;
+    window.addEventListener("resize", function () {
+      if (window.innerWidth === width) {
+        return; // a phone's address bar changing the height is no reason to measure again
+      }
+      width = window.innerWidth;
+      clearTimeout(timer);
+      timer = setTimeout(markWideMaths, 150);
+    });
+  }
+
   function setup() {
     forward(".primary-toggle", "pst-primary-sidebar-modal");
     forward(".secondary-toggle", "pst-secondary-sidebar-modal");
+    DRAWERS.forEach(closeOnLink);
+    linkImages();
+    watchMaths();
   }
   if (document.readyState !== "loading") {
     setup();
