@@ -3,7 +3,8 @@
 Every page of ``_build/html`` is opened in headless Chromium (see conftest.py) at 1400 px and at
 420 px wide. On each page: MathJax has typeset every formula (no raw TeX left, no MathJax error),
 every image and video has loaded, the page made no request beyond 127.0.0.1 and logged no console
-error; at 420 px the chapter-list and page-contents buttons open their drawers, at 1400 px the
+error; at 420 px the page is no wider than the screen (only scroll boxes are) and the chapter-list and
+page-contents buttons open their drawers, at 1400 px the
 sidebar button collapses and restores the chapter list. Screenshots of each page at both widths
 (and of the open drawer) go to ``_build/browser/`` for a person to look at.
 
@@ -185,6 +186,11 @@ def test_page_narrow(driver, book_url, shots, page):
     _check_loaded(state, page)
     name = page.replace("/", "_").removesuffix(".html")
     driver.save_screenshot(str(shots / f"{name}_420.png"))
+    # nothing but scroll boxes (code, wide tables, equations) may be wider than a phone's screen
+    widths = driver.execute_script(
+        "return [document.documentElement.scrollWidth, document.documentElement.clientWidth]")
+    assert widths[0] <= NARROW and widths[0] <= widths[1], (
+        f"{page}: the page scrolls sideways at {NARROW} px ({widths[0]} px wide, viewport {widths[1]} px)")
     for selector, dialog, what in ((".primary-toggle", "pst-primary-sidebar-modal", "chapter list"),
                                    (".secondary-toggle", "pst-secondary-sidebar-modal", "page contents")):
         button = driver.execute_script(VISIBLE, selector)
