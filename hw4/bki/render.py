@@ -291,10 +291,12 @@ def plot_maps(views: dict, cam: Camera, colour: str = "class", which: str = "occ
                                 top=1.02 if cam.persp else 0.95, wspace=0.05)
         else:
             side = 0.8 if colour == "variance" else 1.45      # [in] for the colour bar or legend
+            if not cam.persp:   # room for the titles and the x / z labels around the tilted box
+                tall = 0.95
             fig = plt.figure(figsize=(width * n + side, width * tall))
-            fig.subplots_adjust(left=0.0, right=1 - side / (width * n + side),
-                                bottom=0.17 if cam.persp else 0.04, top=0.92 if cam.persp else 0.94,
-                                wspace=0.05)
+            fig.subplots_adjust(left=0.0 if cam.persp else 0.05, right=1 - side / (width * n + side),
+                                bottom=0.17 if cam.persp else 0.1, top=0.92 if cam.persp else 0.88,
+                                wspace=0.05 if cam.persp else 0.12)
     axes = []
     for i, (title, v) in enumerate(views.items()):
         ax = fig.add_subplot(1, n, i + 1, projection="3d")
