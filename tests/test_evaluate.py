@@ -246,12 +246,18 @@ def test_incremental_growth_is_the_batch_map():
         next(incremental_counts(d, nearest_poses=16))
 
 
+def _eight_samples():
+    """Eight held-out samples over three scans: five in cells both toy maps observe, two in the
+    cell only the fully observed map has seen, one outside the grid."""
+    pts = np.array([[0, 0], [2, 0], [1, 0], [0, 1], [1.1, 1.2], [2, 1], [2.1, 0.9], [9, 9]])
+    occ = np.array([1, 1, 0, 0, 0, 1, 0, 1], bool)
+    return ev.HeldOut(pts, occ, np.zeros(8, np.int64), np.array([0, 1, 2, 0, 1, 2, 0, 1]))
+
+
 def test_bootstrap_without_resampling_weights_is_the_plain_auc():
     m1 = _toy_map([1, 1, 1, 1, 1, 0], [0.9, 0.2, 0.8, 0.1, 0.3, 0.99])
     m2 = _toy_map([1, 1, 1, 1, 1, 1], [0.1, 0.2, 0.8, 0.1, 0.3, 0.99])
-    pts = np.array([[0, 0], [2, 0], [1, 0], [0, 1], [1.1, 1.2], [2, 1], [2.1, 0.9], [9, 9]])
-    occ = np.array([1, 1, 0, 0, 0, 1, 0, 1], bool)
-    s = ev.HeldOut(pts, occ, np.zeros(8, np.int64), np.array([0, 1, 2, 0, 1, 2, 0, 1]))
+    s = _eight_samples()
     b = ev.bootstrap_auc([m1, m2], s, n_boot=30, seed=3)
     # common samples: the five in observed cells of m1 (m2 observes everything)
     assert b["n_common"] == 5
@@ -265,9 +271,7 @@ def test_bootstrap_without_resampling_weights_is_the_plain_auc():
 def test_bootstrap_on_each_maps_own_samples_matches_score_map():
     m1 = _toy_map([1, 1, 1, 1, 1, 0], [0.9, 0.2, 0.8, 0.1, 0.3, 0.99])
     m2 = _toy_map([1, 1, 1, 1, 1, 1], [0.1, 0.2, 0.8, 0.1, 0.3, 0.5])
-    pts = np.array([[0, 0], [2, 0], [1, 0], [0, 1], [1.1, 1.2], [2, 1], [2.1, 0.9], [9, 9]])
-    occ = np.array([1, 1, 0, 0, 0, 1, 0, 1], bool)
-    s = ev.HeldOut(pts, occ, np.zeros(8, np.int64), np.array([0, 1, 2, 0, 1, 2, 0, 1]))
+    s = _eight_samples()
     own = ev.bootstrap_scores([m1, m2], s, n_boot=30, seed=3, common=False)
     shared = ev.bootstrap_scores([m1, m2], s, n_boot=30, seed=3)
     assert own["n_common"] == shared["n_common"] == 5
