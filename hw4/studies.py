@@ -247,9 +247,8 @@ def tune_free_weight(grid_size: float = 0.135, factors=FREE_WEIGHTS,
     """
     split = split or ev.intel_split()
     data = ev.mapping_data(4, split)
-    idx = np.arange(len(data.scans))
-    val = idx % every == offset
-    fit, held = ev.subset(data, idx[~val]), ev.subset(data, idx[val])
+    fit_idx, val_idx = ev.split_scans(len(data.scans), every, offset)
+    fit, held = ev.subset(data, fit_idx), ev.subset(data, val_idx)
     samples = ev.held_out_samples(held, np.arange(len(held.scans)), split.samples.step,
                                   split.samples.margin)
     grid = Grid(grid_size, n_classes=ev.N_LABELS + 1)
@@ -258,7 +257,7 @@ def tune_free_weight(grid_size: float = 0.135, factors=FREE_WEIGHTS,
     for factor in factors:
         counts = base.copy()
         counts[:, -1] *= factor
-        row = {"factor": float(factor), "n_fit": int((~val).sum()), "n_val": int(val.sum())}
+        row = {"factor": float(factor), "n_fit": len(fit_idx), "n_val": len(val_idx)}
         row.update(ev.score_map(map_from_counts(grid, counts, True), samples, keep_roc=False))
         row["miou_all"] = float(np.nanmean(ev.iou_from_confusion(row["confusion"],
                                                                   np.arange(ev.N_LABELS + 1))))
