@@ -213,13 +213,9 @@ def markdown_table(rows, columns=DEFAULT_COLUMNS, digits: int = 3) -> str:
 
 def class_legend_below(fig, num_classes: int = 6, ncol: int = 4):
     """One legend for a figure of semantic maps, below its panels: the regions, free, unknown."""
-    from matplotlib.patches import Patch
     from . import plotting
-    handles = [Patch(color=plotting.CLASS_COLORS[i], label=plotting.CLASS_NAMES[i])
-               for i in range(num_classes)]
-    handles += [Patch(facecolor=plotting.FREE_COLOR, edgecolor="0.6", label="free"),
-                Patch(color=plotting.UNKNOWN_COLOR, label="unknown")]
-    return fig.legend(handles=handles, loc="outside lower center", ncol=ncol, frameon=False)
+    return fig.legend(handles=plotting.class_handles(num_classes), loc="outside lower center",
+                      ncol=ncol, frameon=False)
 
 
 def class_and_variance(m, axes, label: str, vmax: float = 0.25, window: str | None = None,

@@ -154,12 +154,8 @@ def strip_figure(kept: dict, poses, ncols: int = 3, width: float = 7.0):
         ax.label_outer()
     for ax in axes[len(ns):]:
         ax.axis("off")
-    from matplotlib.patches import Patch
-    handles = [Patch(color=plotting.CLASS_COLORS[i], label=plotting.CLASS_NAMES[i])
-               for i in range(6)]
-    handles += [Patch(facecolor=plotting.FREE_COLOR, edgecolor="0.6", label="free"),
-                Patch(color=plotting.UNKNOWN_COLOR, label="unknown")]
-    fig.legend(handles=handles, loc="outside lower center", ncol=4, frameon=False, fontsize=8.5)
+    fig.legend(handles=plotting.class_handles(6), loc="outside lower center", ncol=4,
+               frameon=False, fontsize=8.5)
     return fig
 
 

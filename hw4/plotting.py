@@ -107,10 +107,15 @@ def class_legend(ax, num_classes=6, loc="upper left", **kw):
     unless ``loc``/``bbox_to_anchor`` say otherwise)."""
     if loc == "upper left" and "bbox_to_anchor" not in kw:
         kw["bbox_to_anchor"] = (1.02, 1.0)
+    return ax.legend(handles=class_handles(num_classes), loc=loc, framealpha=0.9, **kw)
+
+
+def class_handles(num_classes=6) -> list:
+    """Legend handles of the regions, free space and unknown, in the maps' colours."""
     handles = [Patch(color=CLASS_COLORS[i], label=CLASS_NAMES[i]) for i in range(num_classes)]
     handles += [Patch(facecolor=FREE_COLOR, edgecolor="0.6", label="free"),
                 Patch(color=UNKNOWN_COLOR, label="unknown")]
-    return ax.legend(handles=handles, loc=loc, framealpha=0.9, **kw)
+    return handles
 
 
 def plot_semantic(ogm, ax=None, title=None, legend=True):
