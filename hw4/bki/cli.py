@@ -201,18 +201,20 @@ def _map_and_write(args, cfg, loaders, out, o) -> int:
         if info["factor"] > 1:
             print(f"note: map3d.html shows {info['voxels']:,} cubes of {info['factor']} voxels per "
                   "edge (most frequent class), to keep the page light.", file=sys.stderr)
+    st = view.state
+    summary = (f"{len(loaders)} scans: {hits:,} training hits and {free:,} free points "
+               f"(after {cfg.ds_resolution} m downsampling)\n"
+               f"{title} map at {cfg.resolution} m: {len(view):,} voxels with evidence, "
+               f"{int((st == OCCUPIED).sum()):,} occupied, {int((st == FREE).sum()):,} free, "
+               f"{int((st == UNKNOWN).sum()):,} unknown (variance > {cfg.var_thresh}); "
+               f"{int((view.state_reference == OCCUPIED).sum()):,} occupied without var_thresh")
     if args.video:  # a second pass, now that the final map fixes the camera of every frame
+        del view, vmap, step, st  # the final map is written: free it before the second map grows
         groups = ((step.map.view(),) for step in map_scans(loaders, cfg, args.method))
         render.mapping_video(groups, cam, (title,), o["mapping.gif"], o["mapping.mp4"],
                              width=5.0, trajectory=path)
         written += ["mapping.gif", "mapping.mp4"]
-    st = view.state
-    print(f"{len(loaders)} scans: {hits:,} training hits and {free:,} free points "
-          f"(after {cfg.ds_resolution} m downsampling)")
-    print(f"{title} map at {cfg.resolution} m: {len(view):,} voxels with evidence, "
-          f"{int((st == OCCUPIED).sum()):,} occupied, {int((st == FREE).sum()):,} free, "
-          f"{int((st == UNKNOWN).sum()):,} unknown (variance > {cfg.var_thresh}); "
-          f"{int((view.state_reference == OCCUPIED).sum()):,} occupied without var_thresh")
+    print(summary)
     print(f"wrote {', '.join(written)} to {out}")
     return 0
 

@@ -480,6 +480,7 @@ def mapping_video(view_groups, cam: Camera, titles, gif=None, mp4=None, strip=No
     -------
     list of (H, W, 3) uint8 frames
     """
+    import gc
     import matplotlib.pyplot as plt
     frames, kept = [], []
     for i, views in enumerate(view_groups):
@@ -490,6 +491,8 @@ def mapping_video(view_groups, cam: Camera, titles, gif=None, mp4=None, strip=No
         fig.set_dpi(dpi)
         frames.append(figure_to_array(fig))
         plt.close(fig)
+        del fig, views  # free this frame's map views and figure before the next map is viewed
+        gc.collect()    # (a 3D figure of ~100k voxel faces is a reference cycle)
     write_video(frames, gif, mp4, fps)
     if strip is not None:
         n = len(frames)

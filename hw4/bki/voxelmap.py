@@ -16,43 +16,26 @@ Storage is a hash of blocks: the voxels are grouped in blocks of ``4 x 4 x 4``; 
 the keys of the blocks seen so far maps each block to a row of a table that holds, per voxel of the
 block, the slot of its evidence in a pool with one row per voxel with evidence (``-1``: none yet).
 Table and pool grow (by half their size at a time) with the observed volume, never with a bounding
-box, and empty voxels cost 4 bytes. Updates are vectorised over all (training point, voxel) pairs
-of a scan, generated in cache-sized chunks of points, and summed in a fixed order (chunk by chunk;
-in a chunk, offset by offset in lexicographic order, point by point), so the result is
-deterministic and independent of thread count.
+box, and empty voxels cost 4 bytes. A scan's S-BKI sums over all its (training point, voxel) pairs
+run compiled (:mod:`hw4.bki.kernel_sums`: one thread, points in raveled voxel order, per point the
+offsets in lexicographic order), so the map is deterministic; S-CSM counts and the merge of a
+scan's sums into the map are vectorised numpy.
 """
 from __future__ import annotations
 
-import os
-from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 
 import numpy as np
 
 from ..errors import InputError
-from ..kernel import sparse_kernel_pieces
+from .kernel_sums import kernel_sums
 
 B = 4                    # block edge [voxels]
 B3 = B ** 3
 _SHIFT = 2               # log2(B)
 _OFF = np.int64(1 << 20)  # block index offset for packing; |block index| < 2^20
-_CHUNK_PAIRS = 1 << 15   # candidate (point, voxel) pairs handled at once (fits in the CPU cache)
 _MAX_BOX = 1 << 24       # most voxels in one scan's scratch box of voxels
-_MAX_DIRECT = 1 << 21    # most (voxel, class) sums of a scan's box summed without compaction
-
-THREADS = min(2, os.cpu_count() or 1)
-"""Threads that generate the (point, voxel) pairs of a scan (numpy releases the GIL), used when a
-point has at least 3 offsets per axis to try (e.g. 0.1 m voxels, ell = 0.3 m; with 0.3 m voxels a
-chunk's numpy calls are too short to gain). The map does not depend on it: each pair is computed
-alone, and the sums run in one fixed order."""
-_pool: tuple | None = None  # (process id, executor): a forked child makes its own
-
-
-def _executor() -> ThreadPoolExecutor:
-    global _pool
-    if _pool is None or _pool[0] != os.getpid() or _pool[1]._max_workers != THREADS:
-        _pool = (os.getpid(), ThreadPoolExecutor(THREADS, thread_name_prefix="hw4-bki"))
-    return _pool[1]
+_MAX_DIRECT = 1 << 21    # most (voxel, class) counts of a scan's box binned without compaction
 
 UNKNOWN, FREE, OCCUPIED = 0, 1, 2
 METHODS = ("sbki", "scsm")
@@ -207,104 +190,46 @@ class VoxelMap:
             self.update(points[order[:half]], labels[order[:half]])
             self.update(points[order[half:]], labels[order[half:]])
             return
-        stride = np.array([dims[1] * dims[2], dims[2], 1], np.int64)
-        shift = max(1, int(np.prod(dims.astype(np.int64))) - 1).bit_length()
         if self.method == "scsm":
-            key = (labels << shift) + (base - lo) @ stride
-            w = None  # weight 1 per point (counted exactly as integers)
+            stride = np.array([dims[1] * dims[2], dims[2], 1], np.int64)
+            shift = max(1, int(np.prod(dims.astype(np.int64))) - 1).bit_length()
+            vt, add, cnt = self._count((labels << shift) + (base - lo) @ stride, shift, dims)
         else:
-            # points in raveled voxel order: a chunk's pairs then land in few cache lines
-            order = np.argsort((base - lo) @ stride, kind="stable")
-            points, labels, base = points[order], labels[order], base[order]
-            key, w = self._kernel_pairs(points, labels, base, lo, stride, shift, R)
-        self._accumulate(key, w, shift, lo, dims)
+            # points in raveled voxel order: consecutive points update neighbouring voxels
+            order = np.argsort((base - lo) @ np.array([dims[1] * dims[2], dims[2], 1]), kind="stable")
+            vt, add, cnt = kernel_sums(points[order], labels[order], base[order], lo, dims, R,
+                                       self.resolution, self.ell, self.sf2, self.num_class)
+        self._merge(vt, add, cnt, lo, dims)
 
-    def _kernel_pairs(self, points, labels, base, lo, stride, shift, R):
-        """All (training point, voxel) pairs with centre distance < ell: keys and weights.
+    def _count(self, key, shift, dims):
+        """S-CSM: the number of training points per touched voxel and class.
 
-        The key of a pair is ``class << shift | code``, where ``code`` is the raveled index of its
-        voxel in the scan's box (origin ``lo``, strides ``stride``). Pairs come chunk by chunk of
-        points; in a chunk, window offset by offset (lexicographic), point by point. Per point and axis only a window of ``W`` consecutive
-        offsets is tried, starting at the first whose centre lies within ``ell`` along that axis
-        alone: an offset outside ``ell`` on one axis is outside in 3D, and along an axis those
-        within form a run (the centres are monotone in the offset, so the squared distance falls,
-        then rises); the offsets before the run are those outside ``ell`` with the centre below
-        the point. ``W`` is the longest run in the chunk (2 of 3 offsets for 0.3 m voxels and
-        ell = 0.3 m, 6 of 7 for 0.1 m). Per-axis work is laid out (axis, offset, point) so that
-        numpy's inner loops run over points.
-        """
-        o = np.arange(-R, R + 1, dtype=np.int64)
-        m = len(o)
-        ell2 = self.ell ** 2
-        centre = (o + 0.5)[None, :, None]
-        res, sf2, ell = self.resolution, self.sf2, self.ell
-        nominal = min(m, int(np.ceil(2 * ell / res)))  # the run's length, but for rounding
-        step = max(1, _CHUNK_PAIRS // nominal ** 3)
-        offs = {}  # window width -> key offsets of the window's voxels from its corner
-        for W in range(1, m + 1):
-            j = np.arange(W, dtype=np.int64)
-            offs[W] = ((j[:, None, None] * stride[0] + j[None, :, None] * stride[1])
-                       + j[None, None, :]).reshape(-1)
-        gather = {}  # (points, W) -> flat index of the window's first offset, per axis and point
-        point_key = (labels << shift) + (o[0] - lo) @ stride
-        pT, bT = np.ascontiguousarray(points.T), np.ascontiguousarray(base.T)
-        col_stride = stride[:, None]
-
-        def chunk(s):
-            p, b = pT[:, s:s + step], bT[:, s:s + step]
-            n = p.shape[1]
-            diff = p[:, None, :] - (b[:, None, :] + centre) * res          # (3, m, n)
-            sq = np.full((3, 2 * m, n), np.inf)         # padded: a window may run past the reach
-            np.multiply(diff, diff, out=sq[:, :m])
-            ok = sq[:, :m] < ell2
-            W = max(1, int(ok.sum(axis=1).max()))
-            first = ((~ok) & (diff > 0)).sum(axis=1)                        # (3, n) run starts
-            g = gather.get((n, W))
-            if g is None:
-                j = np.arange(W, dtype=np.int64)
-                g = gather[(n, W)] = ((np.arange(3)[:, None] * (2 * m) + j) * n)[:, :, None] + np.arange(n)
-            sqw = sq.reshape(-1)[g + (first * n)[:, None, :]]               # (3, W, n)
-            d2 = (sqw[0][:, None, None, :] + sqw[1][None, :, None, :]) + sqw[2][None, None, :, :]
-            d2 = d2.reshape(-1)                                             # offset-major
-            idx = np.flatnonzero(d2 < ell2)
-            pk = point_key[s:s + step] + ((b + first) * col_stride).sum(axis=0)  # window corner
-            key = (offs[W][:, None] + pk).reshape(-1)[idx]
-            return key, sparse_kernel_pieces(np.sqrt(d2[idx]), sf2, ell)
-
-        starts = range(0, len(points), step)
-        if THREADS > 1 and len(starts) > 1 and nominal >= 3:  # thin windows: too little work per call
-            parts = list(_executor().map(chunk, starts))
-        else:
-            parts = [chunk(s) for s in starts]
-        if len(parts) == 1:
-            return parts[0]
-        return np.concatenate([k for k, _ in parts]), np.concatenate([w for _, w in parts])
-
-    def _accumulate(self, key, w, shift, lo, dims) -> None:
-        """Sum the pairs' evidence per (voxel, class) and add it to the map's voxels.
-
-        ``key`` is ``class << shift | code`` with ``code`` the raveled index of each pair's voxel
-        in the scan's box (origin ``lo``, shape ``dims``); ``w`` None means weight 1 per pair. The
-        sums run over the pairs in their given order.
+        ``key`` is ``class << shift | code`` with ``code`` the raveled index of each point's voxel
+        in the scan's box (shape ``dims``). Returns the touched codes (increasing), the counts per
+        (voxel, class) as floats and the counts per voxel.
         """
         n_box = int(np.prod(dims.astype(np.int64)))
         K = self.num_class
         if K << shift <= min(_MAX_DIRECT, 2 * len(key)):  # small box: straight into (class, voxel) bins
-            full = np.bincount(key, weights=w, minlength=K << shift).reshape(K, -1)
+            full = np.bincount(key, minlength=K << shift).reshape(K, -1)
             cnt = np.bincount(key & ((1 << shift) - 1), minlength=n_box)
             vt = np.flatnonzero(cnt)                   # touched voxels, raveled box order
-            add, cnt = full[:, vt].T, cnt[vt]
-        else:                          # compact the touched voxels first
-            code = key & ((1 << shift) - 1)
-            seen = np.zeros(n_box, bool)
-            seen[code] = True
-            vt = np.flatnonzero(seen)
-            V = len(vt)
-            rank = np.empty(n_box, np.int32 if V < 2 ** 31 else np.int64)
-            rank[vt] = np.arange(V)
-            vr = rank[code]
-            add = np.bincount(vr * K + (key >> shift), weights=w, minlength=V * K).reshape(V, K)
-            cnt = np.bincount(vr, minlength=V)
+            return vt, full[:, vt].T.astype(float), cnt[vt]
+        code = key & ((1 << shift) - 1)                # compact the touched voxels first
+        seen = np.zeros(n_box, bool)
+        seen[code] = True
+        vt = np.flatnonzero(seen)
+        V = len(vt)
+        rank = np.empty(n_box, np.int32 if V < 2 ** 31 else np.int64)
+        rank[vt] = np.arange(V)
+        vr = rank[code]
+        add = np.bincount(vr * K + (key >> shift), minlength=V * K).reshape(V, K).astype(float)
+        return vt, add, np.bincount(vr, minlength=V)
+
+    def _merge(self, vt, add, cnt, lo, dims) -> None:
+        """Add the evidence ``add`` (V, K) and pair counts ``cnt`` (V,) of the touched voxels
+        ``vt`` (raveled codes in the scan's box, origin ``lo``, shape ``dims``) to the map."""
+        K = self.num_class
         vox = np.column_stack(np.unravel_index(vt, tuple(int(x) for x in dims))) + lo
         local = (vox & (B - 1)) @ np.array([B * B, B, 1], np.int64)
         # the blocks of the touched voxels, sorted by key: marked in the scan's box of blocks
