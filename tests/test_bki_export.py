@@ -141,6 +141,10 @@ def test_interactive_page_is_offline_and_complete(tmp_path):
     names = [t.name for t in fig.data]
     want = [class_names(4)[k] for k in np.unique(view.cls[view.occupied])]
     assert names == want + ["car trajectory"]
+    # phones: the legend is a row below the scene (never over it), the page is as wide as the device
+    assert fig.layout.legend.orientation == "h" and fig.layout.legend.y <= 0
+    assert fig.layout.legend.yanchor == "top"
+    assert 'name="viewport" content="width=device-width' in html
     # aggregation bounds the voxel count
     small = interactive.write_interactive(view, tmp_path / "small.html", max_voxels=50)
     assert small["factor"] > 1 and small["voxels"] <= 50

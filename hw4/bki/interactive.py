@@ -137,16 +137,25 @@ def interactive_figure(view: MapView, trajectory=None, box=None, max_voxels: int
     lo = np.floor(view.centres[m].min(0)) if m.any() else np.zeros(3)
     hi = np.ceil(view.centres[m].max(0)) if m.any() else np.ones(3)
     span = np.maximum(hi - lo, 1e-6)
-    fig.update_layout(
-        meta=dict(voxels=int(len(idx)), factor=factor, edge=edge),
-        title=dict(text=title, x=0.02, y=0.98, font=dict(size=14)),
+    fig.update_layout(meta=dict(voxels=int(len(idx)), factor=factor, edge=edge),
+                      **_layout(title, dict(x=1, y=span[1] / span[0], z=span[2] / span[0])))
+    return fig, factor
+
+
+def _layout(title: str, aspectratio: dict) -> dict:
+    """Layout of the view, one for every screen: the legend is a horizontal row below the scene
+    (it wraps into a few rows on a phone instead of covering the map), the tool bar stands
+    upright at the right edge (clear of the title), and the camera looks from behind the car."""
+    return dict(
+        title=dict(text=title, x=0.01, xanchor="left", y=0.985, yanchor="top", font=dict(size=14)),
         margin=dict(l=0, r=0, t=30 if title else 0, b=0), paper_bgcolor="white",
-        legend=dict(itemsizing="constant", font=dict(size=12), x=0.99, xanchor="right", y=0.98,
-                    bgcolor="rgba(255,255,255,0.7)"),
-        scene=dict(aspectmode="manual", aspectratio=dict(x=1, y=span[1] / span[0], z=span[2] / span[0]),
+        legend=dict(orientation="h", x=0, xanchor="left", y=0, yanchor="top",
+                    itemsizing="constant", itemwidth=30, font=dict(size=12),
+                    entrywidth=92, entrywidthmode="pixels"),
+        modebar=dict(orientation="v"),
+        scene=dict(aspectmode="manual", aspectratio=aspectratio,
                    xaxis_title="x [m]", yaxis_title="y [m]", zaxis_title="z [m]",
                    camera=dict(eye=dict(x=-1.1, y=0.0, z=0.55), center=dict(x=0.1, y=0, z=-0.1))))
-    return fig, factor
 
 
 def vendor_plotly(folder, target=None) -> Path:
@@ -186,11 +195,7 @@ def write_interactive(view: MapView, path, trajectory=None, box=None, max_voxels
     path = Path(path)
     fig, factor = interactive_figure(view, trajectory, box, max_voxels, title)
     js = vendor_plotly(path.parent, js_path)
-    html = fig.to_html(include_plotlyjs="plotly.min.js", full_html=True, div_id="map3d",
-                       default_width="100%", default_height="100%",
-                       config=dict(displaylogo=False, scrollZoom=True, responsive=True))
-    html = html.replace("<head>", "<head><title>3D semantic map</title>"
-                        "<style>html,body{height:100%;margin:0}</style>", 1)
+    html = _page_html(fig)
     if js_path is not None:
         path.write_text(html, encoding="utf-8")
     else:
@@ -198,6 +203,37 @@ def write_interactive(view: MapView, path, trajectory=None, box=None, max_voxels
     faces = sum(len(t.i) for t in fig.data if t.type == "mesh3d") // 2
     return dict(voxels=fig.layout.meta["voxels"], factor=factor, faces=faces,
                 bytes=path.stat().st_size, js_bytes=js.stat().st_size)
+
+
+# Run once the plot is drawn. The camera's field of view is fixed vertically, so a plot area
+# taller than wide (a phone held upright) cuts the map off at the sides: the camera then moves
+# back along its line of sight until the map is as wide, relative to the area, as on a wide
+# screen. Only the first view changes; a rotation the reader makes later is left alone.
+_FIT_CAMERA = """
+(function () {
+  var gd = document.getElementById('{plot_id}');
+  var size = gd && gd._fullLayout && gd._fullLayout._size;
+  var cam = gd && gd.layout.scene && gd.layout.scene.camera;
+  if (!size || !cam || !size.w) return;
+  var k = Math.min(3, size.h / size.w);
+  if (k <= 1) return;
+  var e = cam.eye, c = cam.center || {x: 0, y: 0, z: 0};
+  Plotly.relayout(gd, {'scene.camera.eye': {x: c.x + k * (e.x - c.x), y: c.y + k * (e.y - c.y),
+                                            z: c.z + k * (e.z - c.z)}});
+})();
+"""
+
+
+def _page_html(fig) -> str:
+    """The stand-alone page of ``fig``: plotly.js by its relative name, the plot filling the window
+    (on a phone too: the page declares the device's width as its own, and the first view backs
+    off on a screen taller than wide so that the map fits across)."""
+    html = fig.to_html(include_plotlyjs="plotly.min.js", full_html=True, div_id="map3d",
+                       default_width="100%", default_height="100%", post_script=_FIT_CAMERA,
+                       config=dict(displaylogo=False, scrollZoom=True, responsive=True))
+    return html.replace("<head>", "<head><title>3D semantic map</title>"
+                        '<meta name="viewport" content="width=device-width, initial-scale=1">'
+                        "<style>html,body{height:100%;margin:0}</style>", 1)
 
 
 def copy_page(src, dest_folder) -> Path:
