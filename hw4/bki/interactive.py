@@ -144,8 +144,10 @@ def interactive_figure(view: MapView, trajectory=None, box=None, max_voxels: int
 
 def _layout(title: str, aspectratio: dict) -> dict:
     """Layout of the view, one for every screen: the legend is a horizontal row below the scene
-    (it wraps into a few rows on a phone instead of covering the map), the tool bar stands
-    upright at the right edge (clear of the title), and the camera looks from behind the car."""
+    (it wraps into a few rows on a phone instead of covering the map; entries of a fixed 92 px
+    of text form even columns, as plotly's wrap of text-sized entries can run past the right
+    edge), the tool bar stands upright at the right edge (clear of the title), and the camera
+    looks from behind the car."""
     return dict(
         title=dict(text=title, x=0.01, xanchor="left", y=0.985, yanchor="top", font=dict(size=14)),
         margin=dict(l=0, r=0, t=30 if title else 0, b=0), paper_bgcolor="white",
