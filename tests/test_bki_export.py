@@ -198,3 +198,26 @@ def test_standalone_bki_usage_error_is_one_line(capsys):
     assert e.value.code == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and err[0].startswith("error: python -m hw4.bki:")
+
+
+def test_palette_png_keeps_exact_colours_and_its_print_size():
+    """render.png_bytes: at most 256 colours, the flat colours exact, and the resolution it was
+    drawn at stored in the file, so that LaTeX prints it at its drawn size (not at 72 dpi)."""
+    import io
+
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    from PIL import Image
+
+    from hw4.bki import render
+    fig, ax = plt.subplots(figsize=(2.0, 1.0))
+    ax.add_patch(plt.Rectangle((0, 0), 1, 1, color=(0.2, 0.4, 0.6)))
+    ax.plot([0, 1], [0, 1], lw=3, color="black")
+    img = Image.open(io.BytesIO(render.png_bytes(fig, dpi=150)))
+    plt.close(fig)
+    assert img.mode == "P" and img.size == (300, 150)
+    assert np.allclose(img.info["dpi"], (150, 150), atol=0.02)   # pHYs: whole pixels per metre
+    rgb = np.asarray(img.convert("RGB")).reshape(-1, 3)
+    assert len(np.unique(rgb, axis=0)) <= 256
+    assert (rgb == (51, 102, 153)).all(axis=1).any()    # the patch colour, exactly

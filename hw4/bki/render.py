@@ -572,7 +572,7 @@ def png_bytes(fig, dpi: int = 200, n_exact: int = 200) -> bytes:
     out_img = Image.fromarray(nearest[inverse].reshape(a.shape[:2]), mode="P")
     out_img.putpalette(palette.astype(np.uint8).ravel().tolist())
     out = io.BytesIO()
-    out_img.save(out, format="PNG", optimize=True)
+    out_img.save(out, format="PNG", optimize=True, dpi=(dpi, dpi))  # print size = drawn size
     return out.getvalue()
 
 
