@@ -219,13 +219,15 @@ def class_legend_below(fig, num_classes: int = 6, ncol: int = 4):
 
 
 def class_and_variance(m, axes, label: str, vmax: float = 0.25, window: str | None = None,
-                       log: bool = True, vmin: float = 1e-3):
+                       log: bool = True, vmin: float = 1e-3, unobserved=None):
     """Class map (``axes[0]``) and variance of the most likely class (``axes[1]``) of a semantic
-    map, zoomed onto ``window`` when given; returns the variance image (for a colour bar)."""
+    map, zoomed onto ``window`` when given; returns the variance image (for a colour bar).
+    ``unobserved``: colour of the cells without evidence in the variance panel
+    (:func:`hw4.plotting.plot_variance`)."""
     from . import plotting
     plotting.plot_semantic(m, ax=axes[0], title=f"class, {label}", legend=False)
     im = plotting.plot_variance(m, ax=axes[1], title=f"variance, {label}", vmax=vmax,
-                                colorbar=False, log=log, vmin=vmin)
+                                colorbar=False, log=log, vmin=vmin, unobserved=unobserved)
     if window:
         for ax in axes:
             zoom(ax, window)

@@ -21,6 +21,7 @@ UNKNOWN_COLOR = np.array([0.5, 0.5, 0.5])
 VARIANCE_CMAP = "viridis"
 OCCUPANCY_CMAP = "gray_r"
 UNOBSERVED_LIGHT = "#c6dbef"   # pale blue for cells without evidence (plot_mean(unobserved=...))
+UNOBSERVED_VARIANCE = "0.82"   # light grey, outside viridis, for them in plot_variance(unobserved=...)
 
 
 def style():
@@ -65,21 +66,30 @@ def plot_mean(ogm, ax=None, title=None, colorbar=True, unobserved=None):
     im = ax.imshow(ogm.grid.to_image(ogm.map["mean"]), origin="lower", extent=extent,
                    cmap=OCCUPANCY_CMAP, vmin=0, vmax=1)
     if unobserved is not None:
-        empty = ogm.grid.to_image(np.asarray(ogm.counts).sum(axis=1) == 0)
-        overlay = np.zeros(empty.shape + (4,))
-        overlay[empty] = mpl.colors.to_rgba(unobserved)
-        ax.imshow(overlay, origin="lower", extent=extent)
+        _shade_unobserved(ax, ogm, unobserved)
     _axes(ax, ogm.grid, title)
     if colorbar:
         ax.figure.colorbar(im, ax=ax, shrink=0.8, label="P(occupied)")
     return im
 
 
-def plot_variance(ogm, ax=None, title=None, vmax=None, colorbar=True, log=False, vmin=1e-4):
+def _shade_unobserved(ax, ogm, colour) -> None:
+    """Paint the cells without evidence (no count of any kind, prior excluded) in ``colour``."""
+    empty = ogm.grid.to_image(np.asarray(ogm.counts).sum(axis=1) == 0)
+    overlay = np.zeros(empty.shape + (4,))
+    overlay[empty] = mpl.colors.to_rgba(colour)
+    ax.imshow(overlay, origin="lower", extent=_extent(ogm.grid))
+
+
+def plot_variance(ogm, ax=None, title=None, vmax=None, colorbar=True, log=False, vmin=1e-4,
+                  unobserved=None):
     """Posterior variance per cell (Beta variance, or that of the most likely class).
 
     ``log``: a logarithmic colour scale from ``vmin`` to ``vmax`` (values below ``vmin`` drawn
     at ``vmin``), so that the differences among observed cells show next to the prior's value.
+    ``unobserved``: a matplotlib colour for the cells without evidence instead of the prior's
+    variance (which sits at the top of the scale, like the most uncertain walls), e.g.
+    :data:`UNOBSERVED_VARIANCE`.
     """
     ax = _new(ax)
     var = ogm.grid.to_image(ogm.map["variance"])
@@ -87,6 +97,8 @@ def plot_variance(ogm, ax=None, title=None, vmax=None, colorbar=True, log=False,
     scale = (dict(norm=mpl.colors.LogNorm(vmin, top, clip=True)) if log
              else dict(vmin=0, vmax=top))
     im = ax.imshow(var, origin="lower", extent=_extent(ogm.grid), cmap=VARIANCE_CMAP, **scale)
+    if unobserved is not None:
+        _shade_unobserved(ax, ogm, unobserved)
     _axes(ax, ogm.grid, title)
     if colorbar:
         ax.figure.colorbar(im, ax=ax, shrink=0.8, label="variance")
