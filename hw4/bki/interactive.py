@@ -118,7 +118,7 @@ def interactive_figure(view: MapView, trajectory=None, box=None, max_voxels: int
         idx, cls = aggregate(own, view.cls[m], factor)
     edge = view.resolution * factor
     K = view.probs.shape[1]
-    pal, names = class_colors(K), class_names(K)
+    pal, names = class_colors(K, np.unique(cls)), class_names(K)
     fig = go.Figure()
     for k in np.unique(cls):
         verts, tri = cube_mesh(idx[cls == k], edge)
@@ -146,8 +146,9 @@ def _layout(title: str, aspectratio: dict) -> dict:
     """Layout of the view, one for every screen: the legend is a horizontal row below the scene
     (it wraps into a few rows on a phone instead of covering the map; entries of a fixed 92 px
     of text form even columns, as plotly's wrap of text-sized entries can run past the right
-    edge), the tool bar stands upright at the right edge (clear of the title), and the camera
-    looks from behind the car."""
+    edge), the tool bar stands upright at the right edge (clear of the title), the scene leaves 6 %
+    of the width free at the left (for the z axis' title on a narrow screen) and the camera looks
+    from behind the car."""
     return dict(
         title=dict(text=title, x=0.01, xanchor="left", y=0.985, yanchor="top", font=dict(size=14)),
         margin=dict(l=0, r=0, t=30 if title else 0, b=0), paper_bgcolor="white",
@@ -155,7 +156,8 @@ def _layout(title: str, aspectratio: dict) -> dict:
                     itemsizing="constant", itemwidth=30, font=dict(size=12),
                     entrywidth=92, entrywidthmode="pixels"),
         modebar=dict(orientation="v"),
-        scene=dict(aspectmode="manual", aspectratio=aspectratio,
+        # the scene keeps a strip at the left: on a phone the z axis' title sits at the edge
+        scene=dict(aspectmode="manual", aspectratio=aspectratio, domain=dict(x=[0.06, 1.0]),
                    xaxis_title="x [m]", yaxis_title="y [m]", zaxis_title="z [m]",
                    camera=dict(eye=dict(x=-1.1, y=0.0, z=0.55), center=dict(x=0.1, y=0, z=-0.1))))
 

@@ -17,11 +17,31 @@ TOY_NAMES = ("free", "ground", "walls", "objects")
 objects standing inside it."""
 
 
-def class_colors(num_class: int) -> np.ndarray:
+KITTI_DISTINCT = {(6, 19): (6, (0, 200, 200))}
+"""Shades that replace SemanticKITTI's own where two classes of one figure would look alike:
+``{(a, b): (class, rgb)}`` recolours ``class`` when both ``a`` and ``b`` are shown. Person
+(255, 30, 30) and traffic-sign (255, 0, 0) are both pure red in the dataset's palette (CIE76
+colour difference 8.9, below the ~10 at which small patches are told apart); person becomes teal,
+the colour farthest from every class of sequence 04's first scans (difference >= 66, to car's
+blue). The pair is rare (a person and a sign in one picture), so the dataset's palette stays
+the default everywhere else. Road (255, 0, 255) and parking (255, 150, 255) differ by 53, in
+lightness and saturation (magenta against light pink), and keep their colours."""
+
+
+def class_colors(num_class: int, present=None) -> np.ndarray:
     """(num_class, 3) uint8 RGB colours: SemanticKITTI's for 20 classes, else the toy palette
-    extended with matplotlib's tab10."""
+    extended with matplotlib's tab10.
+
+    ``present`` (the classes a figure shows) applies :data:`KITTI_DISTINCT`: a class whose
+    dataset colour is that of another shown class gets its documented replacement shade.
+    """
     if num_class == len(KITTI_COLORS):
-        return KITTI_COLORS.copy()
+        out = KITTI_COLORS.copy()
+        shown = set() if present is None else {int(c) for c in np.ravel(present)}
+        for (a, b), (k, rgb) in KITTI_DISTINCT.items():
+            if a in shown and b in shown:
+                out[k] = rgb
+        return out
     out = np.zeros((num_class, 3), np.uint8)
     n = min(num_class, len(TOY_COLORS))
     out[:n] = TOY_COLORS[:n]

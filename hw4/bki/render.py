@@ -137,9 +137,10 @@ def draw_voxels(ax, centres: np.ndarray, rgb: np.ndarray, resolution: float, cam
                                          linewidths=0, rasterized=True))
 
 
-def class_rgb(view: MapView, mask: np.ndarray) -> np.ndarray:
-    """(M, 3) colours in [0, 1] of the selected voxels' most likely classes."""
-    return class_colors(view.probs.shape[1])[view.cls[mask]] / 255.0
+def class_rgb(view: MapView, mask: np.ndarray, present=None) -> np.ndarray:
+    """(M, 3) colours in [0, 1] of the selected voxels' most likely classes (``present``: the
+    classes the whole figure shows, see :func:`hw4.bki.palette.class_colors`)."""
+    return class_colors(view.probs.shape[1], present)[view.cls[mask]] / 255.0
 
 
 def variance_norm(vmax: float, log: bool = False):
@@ -197,9 +198,13 @@ def topdown(view: MapView, mask: np.ndarray, values: np.ndarray | None = None, l
     return img.reshape(shape), extent
 
 
-def class_image(img: np.ndarray, num_class: int) -> np.ndarray:
-    """RGB image (H, W, 3) in [0, 1] of a class image from :func:`topdown` (empty = light grey)."""
-    pal = np.vstack([class_colors(num_class) / 255.0, [[0.92, 0.92, 0.92]]])
+def class_image(img: np.ndarray, num_class: int, present=None) -> np.ndarray:
+    """RGB image (H, W, 3) in [0, 1] of a class image from :func:`topdown` (empty = light grey);
+    ``present``: the classes the whole figure shows (default: those of ``img``), which decide the
+    palette (:func:`hw4.bki.palette.class_colors`)."""
+    if present is None:
+        present = np.unique(img[img >= 0])
+    pal = np.vstack([class_colors(num_class, present) / 255.0, [[0.92, 0.92, 0.92]]])
     return pal[np.where(img < 0, num_class, img)]
 
 
@@ -298,10 +303,11 @@ def plot_maps(views: dict, cam: Camera, colour: str = "class", which: str = "occ
                                 bottom=0.17 if cam.persp else 0.1, top=0.92 if cam.persp else 0.88,
                                 wspace=0.05 if cam.persp else 0.12)
     axes = []
+    present = shown_classes(views, cam)
     for i, (title, v) in enumerate(views.items()):
         ax = fig.add_subplot(1, n, i + 1, projection="3d")
         m = _mask(v, which) & cam.inside(v.centres)
-        rgb = class_rgb(v, m) if colour == "class" else scalar_rgb(v.variance[m], vmax, log=log_variance)
+        rgb = class_rgb(v, m, present) if colour == "class" else scalar_rgb(v.variance[m], vmax, log=log_variance)
         draw_voxels(ax, v.centres[m], rgb, v.resolution, cam)
         if trajectory is not None:
             draw_trajectory(ax, trajectory)
@@ -339,6 +345,13 @@ def variance_colorbar(fig, axes, vmax: float, log: bool = False, cax=None):
     return fig.colorbar(sm, ax=axes, shrink=0.6, pad=0.02, label="variance of the most likely class")
 
 
+def shown_classes(views, cam: Camera | None = None) -> list:
+    """The classes of the occupied voxels inside ``cam``'s box over all ``views``, sorted."""
+    shown = [w.cls[w.occupied & (cam.inside(w.centres) if cam is not None else True)]
+             for w in views.values()]
+    return sorted(set(np.concatenate(shown).tolist()) - {0})
+
+
 def legend_handles(views, cam: Camera | None = None, trajectory: bool = False) -> list:
     """Legend handles of the classes shown (occupied voxels inside ``cam``'s box) and the path."""
     from matplotlib.lines import Line2D
@@ -346,10 +359,8 @@ def legend_handles(views, cam: Camera | None = None, trajectory: bool = False) -
     from .palette import class_names
     v = next(iter(views.values()))
     K = v.probs.shape[1]
-    shown = [w.cls[w.occupied & (cam.inside(w.centres) if cam is not None else True)]
-             for w in views.values()]
-    present = sorted(set(np.concatenate(shown).tolist()) - {0})
-    pal, names = class_colors(K) / 255.0, class_names(K)
+    present = shown_classes(views, cam)
+    pal, names = class_colors(K, present) / 255.0, class_names(K)
     handles = [Patch(color=pal[k], label=names[k]) for k in present]
     if trajectory:
         handles.append(Line2D([], [], color="black", lw=1.6, marker="o", ms=3.2, mfc="white",
@@ -381,11 +392,12 @@ def plot_topdown(views: dict, cam: Camera, colour: str = "class", which: str = "
     fig, axes = plt.subplots(1, n, figsize=(width * n + (0.8 if colour == "variance" else 0), height),
                              squeeze=False, layout="constrained")
     im = None
+    present = shown_classes(views, cam)
     for ax, (title, v) in zip(axes[0], views.items()):
         m = _mask(v, which)
         if colour == "class":
             img, ext = topdown(v, m, lo=cam.lo[:2], hi=cam.hi[:2])
-            ax.imshow(class_image(img, v.probs.shape[1]), origin="lower", extent=ext,
+            ax.imshow(class_image(img, v.probs.shape[1], present), origin="lower", extent=ext,
                       interpolation="nearest")
         else:
             img, ext = topdown(v, m, values=v.variance, lo=cam.lo[:2], hi=cam.hi[:2])
@@ -408,12 +420,13 @@ def plot_topdown(views: dict, cam: Camera, colour: str = "class", which: str = "
     return fig
 
 
-def state_slice(view: MapView, z: float, which: str = "occupied", lo=None, hi=None):
+def state_slice(view: MapView, z: float, which: str = "occupied", lo=None, hi=None, present=None):
     """RGB image of the voxel layer containing height ``z`` [m]: occupied voxels in their class
     colour, free white, unknown (variance above var_thresh) mid grey, no evidence light grey.
 
-    ``which="reference"`` ignores var_thresh as the reference implementation does. Returns the
-    (H, W, 3) image (row 0 = smallest y) and its ``imshow`` extent [m].
+    ``which="reference"`` ignores var_thresh as the reference implementation does; ``present``
+    (the classes of the whole figure) picks the palette. Returns the (H, W, 3) image (row 0 =
+    smallest y) and its ``imshow`` extent [m].
     """
     r = view.resolution
     k = int(np.floor(z / r))
@@ -427,7 +440,7 @@ def state_slice(view: MapView, z: float, which: str = "occupied", lo=None, hi=No
     rgb[img == 0] = 0.5                                   # unknown
     rgb[img == 1] = 1.0                                   # free
     occ = img == 2
-    rgb[occ] = class_colors(K)[cls[occ]] / 255.0
+    rgb[occ] = class_colors(K, present)[cls[occ]] / 255.0
     return rgb, ext
 
 
@@ -439,8 +452,9 @@ def plot_slices(panels: dict, z: float, cam: Camera, width: float = 4.0):
     n = len(panels)
     fig, axes = plt.subplots(1, n, figsize=(width * n, width * 1.15), squeeze=False,
                              layout="constrained")
+    present = sorted(set(np.concatenate([w.cls[w.state_reference == 2] for w, _ in panels.values()]).tolist()))
     for ax, (title, (v, which)) in zip(axes[0], panels.items()):
-        rgb, ext = state_slice(v, z, which, lo=cam.lo[:2], hi=cam.hi[:2])
+        rgb, ext = state_slice(v, z, which, lo=cam.lo[:2], hi=cam.hi[:2], present=present)
         ax.imshow(rgb, origin="lower", extent=ext, interpolation="nearest")
         ax.set_title(title, fontsize=9.5)
         ax.set_xlabel("x [m]")
@@ -448,8 +462,7 @@ def plot_slices(panels: dict, z: float, cam: Camera, width: float = 4.0):
     from .palette import class_names
     v = next(iter(panels.values()))[0]
     K = v.probs.shape[1]
-    present = sorted(set(np.concatenate([w.cls[w.state_reference == 2] for w, _ in panels.values()]).tolist()))
-    handles = [Patch(color=class_colors(K)[k] / 255.0, label=class_names(K)[k]) for k in present]
+    handles = [Patch(color=class_colors(K, present)[k] / 255.0, label=class_names(K)[k]) for k in present]
     handles += [Patch(facecolor="white", edgecolor="0.3", label="free"),
                 Patch(color="0.5", label="unknown (variance > var_thresh)"),
                 Patch(color="0.85", label="no evidence")]
@@ -460,7 +473,7 @@ def plot_slices(panels: dict, z: float, cam: Camera, width: float = 4.0):
 
 def mapping_video(view_groups, cam: Camera, titles, gif=None, mp4=None, strip=None,
                   strip_scans=None, width: float = 4.0, dpi: int = 120, fps: float = 2.0,
-                  trajectory=None, strip_width: float = 6.5) -> list:
+                  trajectory=None, strip_width: float = 7.0) -> list:
     """Render the map after each scan (methods side by side) and write GIF, MP4 and a PNG strip.
 
     Parameters
@@ -504,37 +517,63 @@ def mapping_video(view_groups, cam: Camera, titles, gif=None, mp4=None, strip=No
     return frames
 
 
-def plot_strip(view_groups, scans, cam: Camera, titles, trajectory=None, width: float = 6.5):
-    """Some frames of the mapping video for print: one column per scan, one row per method (all
-    from ``cam``, without axes), ``width`` inch wide, with one class legend under all of them.
+def plot_strip(view_groups, scans, cam: Camera, titles, trajectory=None, width: float = 7.0,
+               max_height: float = 7.0, dpi: int = 200):
+    """Some frames of the mapping video for print: one row per scan, the methods side by side in
+    it (as in the video), ``width`` inch wide and at most ``max_height`` inch tall, with one class
+    legend under all of them.
 
-    ``view_groups`` holds one tuple of MapView per column, ``scans`` the 1-based scan number of each.
+    Each still is drawn on its own (from ``cam``, without axes, the axes being those of the
+    full-size figures) and all are cropped to the box that holds the drawing of any of them, so
+    the maps fill the stills and every still shows the same part of the scene.
+    ``view_groups`` holds one tuple of MapView per row, ``scans`` the 1-based scan number of each.
     """
     import dataclasses
     import matplotlib.pyplot as plt
-    cols, rows = len(view_groups), len(titles)
-    panel = width / cols * 0.8                  # [in] 3D axes draw in a square of the panel height
-    cam = dataclasses.replace(cam, zoom=min(cam.zoom, 1.15))   # so that the drawing fits it
+    rows, cols = len(view_groups), len(titles)
+    label_w, head = 0.3, 0.25                    # [in] row labels at the left, column titles
+    cam = dataclasses.replace(cam, zoom=min(cam.zoom, 1.15))   # so that the drawing fits its axes
     last = {t: v for t, v in zip(titles, view_groups[-1])}
+    present = shown_classes(last, cam)
     legend_rows = 1 + (len(legend_handles(last, cam, trajectory is not None)) - 1) // 6
-    head, foot = 0.22, 0.22 * legend_rows + 0.08
-    height = rows * panel + head + foot
-    fig = plt.figure(figsize=(width, height))
-    fig.subplots_adjust(left=0.04, right=1.0, bottom=foot / height, top=1 - head / height,
-                        wspace=0.0, hspace=0.0)
-    for c, (views, k) in enumerate(zip(view_groups, scans)):
-        for r, (title, v) in enumerate(zip(titles, views)):
-            ax = fig.add_subplot(rows, cols, r * cols + c + 1, projection="3d")
+    foot = 0.2 * legend_rows + 0.15
+    side = (width - label_w) / cols              # [in] the square each still is drawn in
+    stills = []
+    for views, k in zip(view_groups, scans):
+        for v in views:
+            f = plt.figure(figsize=(side, side))
+            ax = f.add_axes([0, 0, 1, 1], projection="3d")
             m = v.occupied & cam.inside(v.centres)
-            draw_voxels(ax, v.centres[m], class_rgb(v, m), v.resolution, cam)
+            draw_voxels(ax, v.centres[m], class_rgb(v, m, present), v.resolution, cam)
             if trajectory is not None:
                 draw_trajectory(ax, np.asarray(trajectory)[:k])
-            ax.set_axis_off()     # the axes are those of the full-size figures
-            if r == 0:
-                ax.set_title(f"scan {k}", fontsize=9, pad=0)
-            if c == 0:
-                ax.text2D(-0.02, 0.5, title, transform=ax.transAxes, rotation=90, ha="right",
-                          va="center", fontsize=9)
+            ax.set_axis_off()
+            f.set_dpi(dpi * 1.25)                # a little finer than print: the crop is enlarged
+            stills.append(figure_to_array(f))
+            plt.close(f)
+    ink = np.any(np.stack([np.any(a < 245, axis=-1) for a in stills]), axis=0)
+    r = np.flatnonzero(ink.any(1))
+    c = np.flatnonzero(ink.any(0))
+    r0, r1 = max(r[0] - 4, 0), r[-1] + 5
+    c0, c1 = max(c[0] - 4, 0), c[-1] + 5
+    aspect = (r1 - r0) / (c1 - c0)               # height / width of a cropped still
+    w = min(side, (max_height - head - foot) / rows / aspect)
+    h = w * aspect
+    fw = label_w + cols * w
+    height = head + rows * h + foot
+    fig = plt.figure(figsize=(width, height))
+    x0 = (width - fw) / 2 + label_w              # [in] left edge of the stills, centred
+    for i, a in enumerate(stills):
+        row, col = divmod(i, cols)
+        ax = fig.add_axes([(x0 + col * w) / width, (foot + (rows - 1 - row) * h) / height,
+                           w / width, h / height])
+        ax.imshow(a[r0:r1, c0:c1], interpolation="antialiased")
+        ax.set_axis_off()
+        if row == 0:
+            ax.set_title(titles[col], fontsize=9.5, pad=2)
+        if col == 0:
+            ax.text(-0.02, 0.5, f"scan {scans[row]}", transform=ax.transAxes, rotation=90,
+                    ha="right", va="center", fontsize=9)
     _class_legend(fig, last, loc="lower center", cam=cam, trajectory=trajectory is not None)
     return fig
 
