@@ -145,10 +145,12 @@ def plot_map(ogm, ax=None, title=None, **kw):
     return (plot_semantic if ogm.semantic else plot_mean)(ogm, ax=ax, title=title, **kw)
 
 
-def plot_dataset(data, ax=None, every=3, title=None):
+def plot_dataset(data, ax=None, every=3, title=None, path_color="crimson"):
     """Robot trajectory and scan end points in the world frame, coloured by label when present.
 
-    data : :class:`hw4.data.IntelData`; every : plot every n-th scan (keeps the figure light).
+    data : :class:`hw4.data.IntelData`; every : plot every n-th scan (keeps the figure light);
+    path_color : matplotlib colour of the trajectory (a dark grey sets it apart from the class
+    colours of a semantic data set).
     """
     ax = _new(ax)
     pts, labels = [], []
@@ -164,7 +166,7 @@ def plot_dataset(data, ax=None, every=3, title=None):
     else:
         ax.scatter(pts[:, 0], pts[:, 1], s=0.3, c="k", linewidths=0, rasterized=True)
         handles = []
-    (line,) = ax.plot(data.poses[:, 0], data.poses[:, 1], "-", color="crimson", lw=0.8,
+    (line,) = ax.plot(data.poses[:, 0], data.poses[:, 1], "-", color=path_color, lw=0.8,
                       label="robot path")
     ax.legend(handles=handles + [line], loc="upper left", bbox_to_anchor=(1.02, 1.0), fontsize=8,
               framealpha=0.9)
