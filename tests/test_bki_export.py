@@ -145,6 +145,8 @@ def test_interactive_page_is_offline_and_complete(tmp_path):
     assert fig.layout.legend.orientation == "h" and fig.layout.legend.y <= 0
     assert fig.layout.legend.yanchor == "top"
     assert 'name="viewport" content="width=device-width' in html
+    assert "overflow:hidden" in html          # no scroll bars that narrow the window in turn
+    assert "1.25 * size.h / size.w" in html   # a tall screen backs off far enough for the z title
     # aggregation bounds the voxel count
     small = interactive.write_interactive(view, tmp_path / "small.html", max_voxels=50)
     assert small["factor"] > 1 and small["voxels"] <= 50
@@ -221,3 +223,40 @@ def test_palette_png_keeps_exact_colours_and_its_print_size():
     rgb = np.asarray(img.convert("RGB")).reshape(-1, 3)
     assert len(np.unique(rgb, axis=0)) <= 256
     assert (rgb == (51, 102, 153)).all(axis=1).any()    # the patch colour, exactly
+
+
+# ---- palette and print strips -------------------------------------------------------------------
+
+def test_kitti_palette_separates_person_and_traffic_sign_only_when_both_are_shown():
+    from hw4.bki.palette import KITTI_DISTINCT
+    base = class_colors(20)
+    assert base[6][0] == base[19][0] == 255 and max(base[6][1:].max(), base[19][1:].max()) <= 30  # both red
+    both = class_colors(20, present=[1, 6, 9, 19])
+    assert tuple(both[6]) == KITTI_DISTINCT[(6, 19)][1] and (both[19] == base[19]).all()
+    assert (np.delete(both, 6, axis=0) == np.delete(base, 6, axis=0)).all()
+    assert (class_colors(20, present=[6, 9]) == base).all()   # person alone keeps its red
+    assert (class_colors(4, present=[1, 2]) == class_colors(4)).all()
+
+
+def test_strip_puts_methods_side_by_side_one_scan_per_row():
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    from hw4.bki import render
+    rng = np.random.default_rng(1)
+    pts = rng.uniform(0, 4, size=(300, 3))
+    lab = rng.integers(1, 4, size=300)
+    a, b = small_map(pts, lab), small_map(pts, lab, method="sbki")
+    cam = render.camera_for([a, b])
+    fig = render.plot_strip([(a, b), (a, b), (a, b)], [1, 2, 3], cam, ("S-CSM", "S-BKI"),
+                            width=7.0, max_height=6.0)
+    w, h = fig.get_size_inches()
+    assert w == 7.0 and h <= 6.0 + 1e-9
+    stills = [ax for ax in fig.axes if ax.images]
+    assert len(stills) == 6
+    titles = [ax.get_title() for ax in stills if ax.get_title()]
+    assert titles == ["S-CSM", "S-BKI"]                 # columns: the methods, as in the video
+    x = sorted({round(ax.get_position().x0, 3) for ax in stills})
+    y = sorted({round(ax.get_position().y0, 3) for ax in stills})
+    assert len(x) == 2 and len(y) == 3                  # rows: the scans
+    plt.close(fig)

@@ -146,9 +146,8 @@ def _layout(title: str, aspectratio: dict) -> dict:
     """Layout of the view, one for every screen: the legend is a horizontal row below the scene
     (it wraps into a few rows on a phone instead of covering the map; entries of a fixed 92 px
     of text form even columns, as plotly's wrap of text-sized entries can run past the right
-    edge), the tool bar stands upright at the right edge (clear of the title), the scene leaves 6 %
-    of the width free at the left (for the z axis' title on a narrow screen) and the camera looks
-    from behind the car."""
+    edge), the tool bar stands upright at the right edge (clear of the title), and the camera
+    looks from behind the car."""
     return dict(
         title=dict(text=title, x=0.01, xanchor="left", y=0.985, yanchor="top", font=dict(size=14)),
         margin=dict(l=0, r=0, t=30 if title else 0, b=0), paper_bgcolor="white",
@@ -156,8 +155,7 @@ def _layout(title: str, aspectratio: dict) -> dict:
                     itemsizing="constant", itemwidth=30, font=dict(size=12),
                     entrywidth=92, entrywidthmode="pixels"),
         modebar=dict(orientation="v"),
-        # the scene keeps a strip at the left: on a phone the z axis' title sits at the edge
-        scene=dict(aspectmode="manual", aspectratio=aspectratio, domain=dict(x=[0.06, 1.0]),
+        scene=dict(aspectmode="manual", aspectratio=aspectratio,
                    xaxis_title="x [m]", yaxis_title="y [m]", zaxis_title="z [m]",
                    camera=dict(eye=dict(x=-1.1, y=0.0, z=0.55), center=dict(x=0.1, y=0, z=-0.1))))
 
@@ -212,14 +210,15 @@ def write_interactive(view: MapView, path, trajectory=None, box=None, max_voxels
 # Run once the plot is drawn. The camera's field of view is fixed vertically, so a plot area
 # taller than wide (a phone held upright) cuts the map off at the sides: the camera then moves
 # back along its line of sight until the map is as wide, relative to the area, as on a wide
-# screen. Only the first view changes; a rotation the reader makes later is left alone.
+# screen, and a quarter further, so that the axis titles (z at the left edge) fit too. Only the
+# first view changes; a rotation the reader makes later is left alone.
 _FIT_CAMERA = """
 (function () {
   var gd = document.getElementById('{plot_id}');
   var size = gd && gd._fullLayout && gd._fullLayout._size;
   var cam = gd && gd.layout.scene && gd.layout.scene.camera;
   if (!size || !cam || !size.w) return;
-  var k = Math.min(3, size.h / size.w);
+  var k = Math.min(3, 1.25 * size.h / size.w);
   if (k <= 1) return;
   var e = cam.eye, c = cam.center || {x: 0, y: 0, z: 0};
   Plotly.relayout(gd, {'scene.camera.eye': {x: c.x + k * (e.x - c.x), y: c.y + k * (e.y - c.y),
@@ -231,13 +230,14 @@ _FIT_CAMERA = """
 def _page_html(fig) -> str:
     """The stand-alone page of ``fig``: plotly.js by its relative name, the plot filling the window
     (on a phone too: the page declares the device's width as its own, and the first view backs
-    off on a screen taller than wide so that the map fits across)."""
+    off on a screen taller than wide so that the map fits across). The page never scrolls: the
+    plot fills it exactly, and a scroll bar would narrow the window and call up the other one."""
     html = fig.to_html(include_plotlyjs="plotly.min.js", full_html=True, div_id="map3d",
                        default_width="100%", default_height="100%", post_script=_FIT_CAMERA,
                        config=dict(displaylogo=False, scrollZoom=True, responsive=True))
     return html.replace("<head>", "<head><title>3D semantic map</title>"
                         '<meta name="viewport" content="width=device-width, initial-scale=1">'
-                        "<style>html,body{height:100%;margin:0}</style>", 1)
+                        "<style>html,body{height:100%;margin:0;overflow:hidden}</style>", 1)
 
 
 def copy_page(src, dest_folder) -> Path:
