@@ -64,6 +64,17 @@ const done = arguments[arguments.length - 1];
   out.brokenPosters = (await Promise.all(posters.map(src => new Promise(r => {
     const i = new Image(); i.onload = () => r(i.naturalWidth > 0 ? null : src);
     i.onerror = () => r(src); i.src = src; })))).filter(Boolean);
+  out.badAlt = imgs.filter(i => i.closest(".bd-article") &&
+      (!i.alt.trim() || /\\.(png|jpe?g|gif|svg)$/i.test(i.alt.trim()))).map(i => i.src);
+  out.coveredVideos = videos.filter(v => v.videoWidth && v.clientWidth &&
+      v.clientHeight < v.clientWidth * v.videoHeight / v.videoWidth + 88)
+      .map(v => v.currentSrc + " " + v.clientWidth + "x" + v.clientHeight);
+  out.loosePunctuation = Array.from(document.querySelectorAll(".bd-article span.math"))
+      .filter(m => !m.parentNode.classList.contains("hw4-math-nowrap") &&
+              m.nextSibling && m.nextSibling.nodeType === 3 &&
+              /^[.,;:!?)]/.test(m.nextSibling.nodeValue)).length;
+  const bookPdf = document.querySelector(".hw4-book-pdf-button");
+  out.headerPdf = bookPdf ? bookPdf.href : null;
   const pdf = document.querySelector(".hw4-pdf-link a");
   out.pdfLink = pdf ? pdf.href : null;
   if (pdf) {
@@ -137,6 +148,11 @@ def _check_loaded(state, page):
         assert state["untypeset"] == 0, f"{page}: {state['untypeset']} of {state['maths']} formulas not typeset"
         assert not state["mathErrors"], f"{page}: MathJax errors {state['mathErrors']}"
     assert not state["rawTex"], f"{page}: raw TeX delimiters left in the text: {state['rawTex']}"
+    assert not state["badAlt"], f"{page}: images described by a file name or nothing: {state['badAlt']}"
+    assert not state["coveredVideos"], (
+        f"{page}: video players whose controls cover the frame: {state['coveredVideos']}")
+    assert state["loosePunctuation"] == 0, (
+        f"{page}: {state['loosePunctuation']} inline formulas whose punctuation can wrap alone")
 
 
 def test_pages_found():
@@ -154,6 +170,8 @@ def test_page_wide(driver, book_url, shots, page):
         assert state["pdfStatus"] == 200 and state["pdfType"] == "application/pdf", (
             f"{page}: the PDF link {state['pdfLink']} gives {state['pdfStatus']} {state['pdfType']}"
             " (scripts/build_book.sh all copies the PDF into _build/html)")
+        assert state["headerPdf"] == state["pdfLink"], (
+            f"{page}: the header's download menu does not offer the book's PDF ({state['headerPdf']})")
     name = page.replace("/", "_").removesuffix(".html")
     driver.save_screenshot(str(shots / f"{name}_1400.png"))
 
@@ -210,3 +228,21 @@ def test_page_narrow(driver, book_url, shots, page):
     assert not errors, f"{page}: console errors at {NARROW} px: {errors}"
     outside = _nonlocal(_requests(driver))
     assert not outside, f"{page}: requests beyond 127.0.0.1: {outside}"
+
+
+def test_search_from_disk_without_console_errors(driver):
+    """A reader who opens the book from disk (file://) can search it: results, no console error
+    (an excerpt would be fetched from each result's page, which Chromium refuses over file://)."""
+    _viewport(driver, WIDE)
+    driver.get_log("browser")
+    driver.get((HTML / "search.html").as_uri() + "?q=sparse+kernel")
+    results = []
+    for _ in range(50):
+        results = driver.find_elements("css selector", "#search-results li")
+        if results:
+            break
+        time.sleep(0.2)
+    time.sleep(0.5)
+    assert results, "searching the book for 'sparse kernel' found nothing"
+    errors = _console_errors(driver)
+    assert not errors, f"search.html from disk: console errors {errors}"

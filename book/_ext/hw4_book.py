@@ -25,6 +25,10 @@ Offline MathJax
     (``scripts/setup.sh``). A missing copy stops the HTML build with one sentence instead of a
     book whose maths silently never renders.
 
+Image descriptions
+    An image without alt text gets its figure's caption (or a generic description), not its
+    file path.
+
 ``HW4_BOOK_AUTHOR``
     When this environment variable is set (``python -m hw4 package --uniqname NAME`` sets it),
     the PDF title page shows its value above the configured author line.
@@ -33,6 +37,7 @@ from __future__ import annotations
 
 import os
 import posixpath
+import re
 import urllib.parse
 from pathlib import Path
 
@@ -107,6 +112,22 @@ def depart_video_other(self, node: video) -> None:
     pass
 
 
+def describe_images(app: Sphinx, doctree: nodes.document, docname: str) -> None:
+    """Give every image without alt text a description: its figure's caption (without the
+    number), or, for a plot output without a caption, "Plot from the code cell above". Sphinx
+    would otherwise write the image's file path as its alt text, which a screen reader reads."""
+    for image in doctree.findall(nodes.image):
+        if image.get("alt"):
+            continue
+        figure = image.parent
+        while figure is not None and not isinstance(figure, nodes.figure):
+            figure = figure.parent
+        captions = list(figure.findall(nodes.caption)) if figure is not None else []
+        text = " ".join(captions[0].astext().split()) if captions else ""
+        text = re.sub(r"\\([A-Za-z]+)", r"\1", text).replace("{", "").replace("}", "")  # TeX
+        image["alt"] = text or "Plot from the code cell above"
+
+
 def check_mathjax(app: Sphinx) -> None:
     """Stop an HTML build whose MathJax copy (scripts/setup.sh) is missing."""
     if app.builder.format != "html":
@@ -146,6 +167,7 @@ def setup(app: Sphinx) -> dict:
                  texinfo=(visit_video_other, depart_video_other))
     app.add_directive("video", VideoFigure)
     app.connect("builder-inited", check_mathjax)
+    app.connect("doctree-resolved", describe_images)
     # after sphinx-external-toc has set root_doc, which the default latex_documents names
     app.connect("config-inited", override_author, priority=900)
     app.connect("config-inited", light_mode)

@@ -13,6 +13,12 @@
  *    wrapped in a link to its own file, reachable with the keyboard; icons and logos are not.
  * 4. A display equation wider than its column gets its number on the line below (hw4-book.css),
  *    measured again when the window changes width; what is still wider scrolls in its own box.
+ * 5. Line breaks: punctuation right after inline maths stays on the formula's line, and a short
+ *    inline literal (an option such as --video) is never broken.
+ * 6. Video players are one control bar taller than their frame (the frame at the top, see
+ *    hw4-book.css), so the paused player's controls do not cover the plot.
+ * 7. The header's download menu offers the whole book's PDF (the link at the foot of the chapter
+ *    list, book/_ext/templates/hw4-pdf-link.html) above the theme's "print this page".
  */
 (function () {
   "use strict";
@@ -128,11 +134,91 @@
     });
   }
 
+  function keepPunctuation() {
+    var maths = document.querySelectorAll(".bd-article span.math");
+    Array.prototype.forEach.call(maths, function (math) {
+      var next = math.nextSibling;
+      if (!next || next.nodeType !== 3) {
+        return;
+      }
+      var m = /^[.,;:!?)\u2019]+/.exec(next.nodeValue);
+      if (!m) {
+        return;
+      }
+      var wrap = document.createElement("span");
+      wrap.className = "hw4-math-nowrap";
+      math.parentNode.insertBefore(wrap, math);
+      wrap.appendChild(math);
+      wrap.appendChild(document.createTextNode(m[0]));
+      next.nodeValue = next.nodeValue.slice(m[0].length);
+    });
+    var literals = document.querySelectorAll(".bd-article code.literal");
+    Array.prototype.forEach.call(literals, function (code) {
+      if (code.textContent.length <= 24) {
+        code.classList.add("hw4-code-short");
+      }
+    });
+  }
+
+  // [CSS px] the height of a media player's controls with their shade: Chromium draws a row of
+  // buttons above a progress bar, on desktops and phones alike
+  var CONTROLS = 92;
+
+  function sizeVideos() {
+    var videos = document.querySelectorAll("video.hw4-video");
+    Array.prototype.forEach.call(videos, function (video) {
+      function fit() {
+        if (!video.videoWidth || !video.clientWidth) {
+          return;
+        }
+        video.style.height = Math.round(
+          video.clientWidth * video.videoHeight / video.videoWidth + CONTROLS) + "px";
+      }
+      video.addEventListener("loadedmetadata", fit);
+      window.addEventListener("resize", fit);
+      fit();
+    });
+  }
+
+  function bookPdfButton() {
+    var book = document.querySelector(".hw4-pdf-link a");
+    var buttons = document.querySelectorAll(".btn-download-pdf-button");
+    if (!book) {
+      return;
+    }
+    Array.prototype.forEach.call(buttons, function (button) {
+      var item = button.closest("li");
+      if (!item) {
+        return;
+      }
+      var link = document.createElement("a");
+      link.className = "btn btn-sm dropdown-item hw4-book-pdf-button";
+      link.href = book.href;
+      link.setAttribute("download", "");
+      link.title = "Download the whole book as one PDF";
+      link.innerHTML = button.innerHTML;
+      var text = link.querySelector(".btn__text-container");
+      if (text) {
+        text.textContent = ".pdf (whole book)";
+      }
+      var own = button.querySelector(".btn__text-container");
+      if (own) {
+        own.textContent = "print this page";
+      }
+      var li = document.createElement("li");
+      li.appendChild(link);
+      item.parentNode.insertBefore(li, item);
+    });
+  }
+
   function setup() {
     forward(".primary-toggle", "pst-primary-sidebar-modal");
     forward(".secondary-toggle", "pst-secondary-sidebar-modal");
     DRAWERS.forEach(closeOnLink);
     linkImages();
+    keepPunctuation();
+    sizeVideos();
+    bookPdfButton();
     watchMaths();
   }
   if (document.readyState !== "loading") {
