@@ -20,6 +20,7 @@ from .grid import Grid
 from . import plotting
 
 EVERY = 25  # scans per animation frame
+PATH_COLOR = "black"  # the robot's path: apart from every class colour (crimson was close to hallways' pink)
 
 
 def incremental_counts(data, every: int = EVERY, grid_size: float = 0.135, semantic: bool = True,
@@ -73,8 +74,8 @@ def draw_frame(ax, grid, counts, poses, n_scans: int, legend: bool = False):
     view = _semantic_view(grid, counts)
     plotting.plot_semantic(view, ax=ax, legend=legend)
     p = np.asarray(poses)[:n_scans]
-    ax.plot(p[:, 0], p[:, 1], "-", color="crimson", lw=0.8)
-    ax.plot(p[-1, 0], p[-1, 1], "o", color="crimson", ms=4)
+    ax.plot(p[:, 0], p[:, 1], "-", color=PATH_COLOR, lw=0.8)
+    ax.plot(p[-1, 0], p[-1, 1], "o", color=PATH_COLOR, ms=4)
     ax.text(0.98, 0.02, f"{n_scans} scans", transform=ax.transAxes, ha="right", va="bottom",
             fontsize=9, bbox=dict(facecolor="white", edgecolor="0.7", pad=2))
 

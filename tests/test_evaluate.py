@@ -232,6 +232,15 @@ def test_sigma_scaling_used_by_the_kernel_study_is_exact():
     np.testing.assert_allclose(b, a * 10.0, rtol=1e-12, atol=0)
 
 
+def test_growth_path_stands_apart_from_every_map_colour():
+    """The robot's path is drawn over class maps: far from every class colour, free and unknown."""
+    import matplotlib.colors as mc
+    from hw4 import growth, plotting
+    path = np.array(mc.to_rgb(growth.PATH_COLOR))
+    colours = np.vstack([plotting.CLASS_COLORS, plotting.FREE_COLOR, plotting.UNKNOWN_COLOR])
+    assert np.linalg.norm(colours - path, axis=1).min() > 0.5
+
+
 def test_incremental_growth_is_the_batch_map():
     from hw4.growth import incremental_counts
     from hw4.tasks import load_task_data
