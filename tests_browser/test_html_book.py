@@ -246,3 +246,42 @@ def test_search_from_disk_without_console_errors(driver):
     assert results, "searching the book for 'sparse kernel' found nothing"
     errors = _console_errors(driver)
     assert not errors, f"search.html from disk: console errors {errors}"
+
+
+def test_swipe_over_the_3d_view_scrolls_the_page_on_a_phone(driver, book_url):
+    """On a touch screen a swipe over Task 5's interactive view scrolls the page (a veil lies over
+    the view); after a tap on the veil the same swipe turns the map instead."""
+    page = "notebooks/T5_bki_3d.html"
+    _viewport(driver, NARROW)
+    driver.execute_cdp_cmd("Emulation.setTouchEmulationEnabled", {"enabled": True, "maxTouchPoints": 1})
+    try:
+        moved = []
+        for tap in (False, True):
+            driver.get(book_url + page)
+            driver.execute_async_script(LOAD_STATE)
+            driver.execute_script(
+                "document.querySelector('.hw4-interactive').scrollIntoView({block: 'start'})")
+            time.sleep(1.0)
+            if tap:
+                driver.execute_script("document.querySelector('.hw4-interactive .hw4-veil').click()")
+                time.sleep(0.3)
+            r = driver.execute_script(
+                "const r = document.querySelector('.hw4-interactive iframe').getBoundingClientRect();"
+                "return [r.left + r.width / 2, r.top + r.height / 2]")
+            y0 = driver.execute_script("return window.scrollY")
+            x, y = int(r[0]), int(r[1])
+
+            def touch(kind, yy):
+                driver.execute_cdp_cmd("Input.dispatchTouchEvent", {
+                    "type": kind, "touchPoints": [] if kind == "touchEnd" else [{"x": x, "y": yy}]})
+            touch("touchStart", y)
+            for k in range(1, 11):
+                touch("touchMove", y - 20 * k)
+                time.sleep(0.02)
+            touch("touchEnd", y - 200)
+            time.sleep(0.5)
+            moved.append(driver.execute_script("return window.scrollY") - y0)
+        assert moved[0] > 100, f"{page}: a swipe over the 3D view did not scroll the page ({moved[0]} px)"
+        assert moved[1] < 20, f"{page}: with the veil lifted the swipe still scrolled ({moved[1]} px)"
+    finally:
+        driver.execute_cdp_cmd("Emulation.setTouchEmulationEnabled", {"enabled": False})

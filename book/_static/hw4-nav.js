@@ -19,6 +19,8 @@
  *    hw4-book.css), so the paused player's controls do not cover the plot.
  * 7. The header's download menu offers the whole book's PDF (the link at the foot of the chapter
  *    list, book/_ext/templates/hw4-pdf-link.html) above the theme's "print this page".
+ * 8. On a touch screen the interactive 3D view sits under a veil, so that a swipe over it scrolls
+ *    the page instead of turning the map; a tap lifts the veil, a touch elsewhere lowers it.
  */
 (function () {
   "use strict";
@@ -211,6 +213,38 @@
     });
   }
 
+  function veilInteractive() {
+    if (!window.matchMedia("(pointer: coarse)").matches) {
+      return;
+    }
+    var views = document.querySelectorAll(".hw4-interactive");
+    Array.prototype.forEach.call(views, function (view) {
+      var frame = view.querySelector("iframe");
+      if (!frame) {
+        return;
+      }
+      var veil = document.createElement("button");
+      veil.type = "button";
+      veil.className = "hw4-veil";
+      veil.setAttribute("aria-label", "Use the 3D view (a swipe over it then turns the map)");
+      veil.innerHTML = "<span>Tap to rotate and zoom</span>";
+      function place() {
+        veil.style.height = frame.offsetHeight + "px";
+      }
+      veil.addEventListener("click", function () {
+        veil.hidden = true;
+      });
+      document.addEventListener("touchstart", function (event) {
+        if (veil.hidden && !frame.contains(event.target) && event.target !== frame) {
+          veil.hidden = false;
+        }
+      }, {passive: true});
+      window.addEventListener("resize", place);
+      view.insertBefore(veil, frame.nextSibling);
+      place();
+    });
+  }
+
   function setup() {
     forward(".primary-toggle", "pst-primary-sidebar-modal");
     forward(".secondary-toggle", "pst-secondary-sidebar-modal");
@@ -219,6 +253,7 @@
     keepPunctuation();
     sizeVideos();
     bookPdfButton();
+    veilInteractive();
     watchMaths();
   }
   if (document.readyState !== "loading") {
