@@ -238,6 +238,18 @@ def test_kitti_palette_separates_person_and_traffic_sign_only_when_both_are_show
     assert (class_colors(4, present=[1, 2]) == class_colors(4)).all()
 
 
+def test_kitti_palette_separates_car_and_other_vehicle_only_when_both_are_shown():
+    from hw4.bki.palette import KITTI_DISTINCT
+    base = class_colors(20)
+    both = class_colors(20, present=[1, 5, 9])
+    assert tuple(both[5]) == KITTI_DISTINCT[(1, 5)][1] and (both[1] == base[1]).all()
+    assert (np.delete(both, 5, axis=0) == np.delete(base, 5, axis=0)).all()
+    assert (class_colors(20, present=[5, 9]) == base).all()   # other-vehicle alone keeps its blue
+    everything = class_colors(20, present=range(20))          # both rules at once
+    assert tuple(everything[6]) == KITTI_DISTINCT[(6, 19)][1]
+    assert tuple(everything[5]) == KITTI_DISTINCT[(1, 5)][1]
+
+
 def test_strip_puts_methods_side_by_side_one_scan_per_row():
     import matplotlib
     matplotlib.use("Agg")
@@ -260,3 +272,25 @@ def test_strip_puts_methods_side_by_side_one_scan_per_row():
     y = sorted({round(ax.get_position().y0, 3) for ax in stills})
     assert len(x) == 2 and len(y) == 3                  # rows: the scans
     plt.close(fig)
+
+
+def test_vertical_slice_draws_each_voxel_of_the_layer_at_its_y_and_z():
+    from hw4.bki import render
+    # voxels 0.5 m: class 1 at (x, y, z) voxel (0, 1, 0), class 2 at (0, 3, 2); one in layer x = 1
+    view = small_map([[0.1, 0.6, 0.1], [0.2, 1.7, 1.2], [0.7, 0.6, 0.1]], [1, 2, 3])
+    rgb, ext = render.vertical_slice(view, 0.2, lo=(0.0, 0.0), hi=(2.0, 1.4))
+    assert ext == (0.0, 2.5, 0.0, 1.5) and rgb.shape == (3, 5, 3)    # rows: z, columns: y
+    pal = class_colors(4) / 255.0
+    np.testing.assert_allclose(rgb[0, 1], pal[1])
+    np.testing.assert_allclose(rgb[2, 3], pal[2])
+    np.testing.assert_allclose(rgb[0, 0], 0.85)                       # no evidence
+    assert not np.isclose(rgb, pal[3]).all(axis=-1).any()             # layer x = 1 is not drawn
+
+
+def test_log_variance_scale_starts_at_the_given_floor():
+    from hw4.bki import render
+    norm = render.variance_norm(0.09, log=True, vmin=1e-5)
+    assert norm.vmin == 1e-5 and norm.vmax == 0.09
+    assert render.variance_norm(0.09, log=True).vmin == pytest.approx(9e-5)   # the default floor
+    rgb = render.scalar_rgb(np.array([1e-6, 1e-5, 0.5]), 0.09, log=True, vmin=1e-5)
+    np.testing.assert_allclose(rgb[0], rgb[1])                                # clipped below

@@ -17,15 +17,19 @@ TOY_NAMES = ("free", "ground", "walls", "objects")
 objects standing inside it."""
 
 
-KITTI_DISTINCT = {(6, 19): (6, (0, 200, 200))}
+KITTI_DISTINCT = {(6, 19): (6, (0, 200, 200)), (1, 5): (5, (0, 90, 90))}
 """Shades that replace SemanticKITTI's own where two classes of one figure would look alike:
 ``{(a, b): (class, rgb)}`` recolours ``class`` when both ``a`` and ``b`` are shown. Person
 (255, 30, 30) and traffic-sign (255, 0, 0) are both pure red in the dataset's palette (CIE76
 colour difference 8.9, below the ~10 at which small patches are told apart); person becomes teal,
 the colour farthest from every class of sequence 04's first scans (difference >= 66, to car's
-blue). The pair is rare (a person and a sign in one picture), so the dataset's palette stays
-the default everywhere else. Road (255, 0, 255) and parking (255, 150, 255) differ by 53, in
-lightness and saturation (magenta against light pink), and keep their colours."""
+blue). Car (100, 150, 245) and other-vehicle (0, 0, 255) are two blues: CIE76 puts them 93
+apart, but it overstates differences between saturated blues, and in small patches of a top view
+the two read as one hue; when both are shown, other-vehicle becomes dark teal (a hue no class
+uses; difference 64 to car, >= 53 to every other class but the never-drawn free). A replacement
+applies only when both classes of its pair are shown, so the dataset's palette stays the default
+everywhere else. Road (255, 0, 255) and parking (255, 150, 255) differ by 53, in lightness and
+saturation (magenta against light pink), and keep their colours."""
 
 
 def class_colors(num_class: int, present=None) -> np.ndarray:

@@ -143,17 +143,21 @@ def class_rgb(view: MapView, mask: np.ndarray, present=None) -> np.ndarray:
     return class_colors(view.probs.shape[1], present)[view.cls[mask]] / 255.0
 
 
-def variance_norm(vmax: float, log: bool = False):
+def variance_norm(vmax: float, log: bool = False, vmin: float | None = None):
     """The colour scale of variances: linear on ``[0, vmax]`` or logarithmic on
-    ``[vmax / 1000, vmax]`` (clipped at both ends)."""
+    ``[vmin, vmax]`` (default ``vmin = vmax / 1000``), clipped at both ends."""
     from matplotlib.colors import LogNorm, Normalize
-    return LogNorm(vmax / 1000, vmax, clip=True) if log else Normalize(0, vmax, clip=True)
+    if not log:
+        return Normalize(0, vmax, clip=True)
+    return LogNorm(vmax / 1000 if vmin is None else vmin, vmax, clip=True)
 
 
-def scalar_rgb(values: np.ndarray, vmax: float, cmap: str = "viridis", log: bool = False) -> np.ndarray:
+def scalar_rgb(values: np.ndarray, vmax: float, cmap: str = "viridis", log: bool = False,
+               vmin: float | None = None) -> np.ndarray:
     """(M, 3) colours in [0, 1] of scalars on the scale of :func:`variance_norm`."""
     from matplotlib import colormaps
-    return colormaps[cmap](np.ma.filled(variance_norm(vmax, log)(np.asarray(values, float)), 1.0))[:, :3]
+    norm = variance_norm(vmax, log, vmin)
+    return colormaps[cmap](np.ma.filled(norm(np.asarray(values, float)), 1.0))[:, :3]
 
 
 def topdown(view: MapView, mask: np.ndarray, values: np.ndarray | None = None, lo=None, hi=None):
@@ -379,11 +383,14 @@ def _class_legend(fig, views, loc: str = "lower center", cam: Camera | None = No
 
 
 def plot_topdown(views: dict, cam: Camera, colour: str = "class", which: str = "occupied",
-                 vmax: float = 0.09, width: float = 4.0, trajectory=None, log_variance: bool = False):
+                 vmax: float = 0.09, width: float = 4.0, trajectory=None, log_variance: bool = False,
+                 vmin: float | None = None):
     """Top views of several maps side by side (highest selected voxel per column), same extent.
 
-    ``trajectory`` (T, 3) [m] draws the car's path; ``log_variance`` puts the variance on a
-    logarithmic colour scale from ``vmax / 1000`` to ``vmax`` (real scans span several decades).
+    ``which`` selects the voxels: "occupied" (with var_thresh) or "reference" (every voxel with a
+    class, without it). ``trajectory`` (T, 3) [m] draws the car's path; ``log_variance`` puts the
+    variance on a logarithmic colour scale from ``vmin`` (default ``vmax / 1000``) to ``vmax``
+    (real scans span several decades).
     """
     import matplotlib.pyplot as plt
     n = len(views)
@@ -403,7 +410,7 @@ def plot_topdown(views: dict, cam: Camera, colour: str = "class", which: str = "
             img, ext = topdown(v, m, values=v.variance, lo=cam.lo[:2], hi=cam.hi[:2])
             ax.set_facecolor((0.92, 0.92, 0.92))
             im = ax.imshow(img, origin="lower", extent=ext, cmap="viridis",
-                           norm=variance_norm(vmax, log_variance),
+                           norm=variance_norm(vmax, log_variance, vmin),
                            interpolation="nearest")
         if trajectory is not None:
             draw_trajectory(ax, trajectory)
@@ -442,6 +449,79 @@ def state_slice(view: MapView, z: float, which: str = "occupied", lo=None, hi=No
     occ = img == 2
     rgb[occ] = class_colors(K, present)[cls[occ]] / 255.0
     return rgb, ext
+
+
+def vertical_slice(view: MapView, x: float, which: str = "occupied", lo=None, hi=None,
+                   present=None):
+    """RGB image of the voxel layer across the x axis that contains ``x`` [m] (a cut in the y-z
+    plane, seen along +x): occupied voxels in their class colour, free white, unknown (variance
+    above var_thresh) mid grey, no evidence light grey.
+
+    ``lo``, ``hi`` : (2,) [m], the (y, z) extent (default: the layer's voxels'); ``which`` and
+    ``present`` as in :func:`state_slice`. Returns the (H, W, 3) image (row 0 = lowest z, column
+    0 = smallest y) and its ``imshow`` extent (ymin, ymax, zmin, zmax) [m].
+    """
+    r = view.resolution
+    idx = np.floor(view.centres / r).astype(np.int64)
+    layer = idx[:, 0] == int(np.floor(x / r))
+    yz = idx[layer][:, 1:]
+    if lo is None:
+        lo = yz.min(0) * r if len(yz) else np.zeros(2)
+        hi = yz.max(0) * r if len(yz) else np.ones(2)
+    i0 = np.floor(np.asarray(lo) / r).astype(np.int64)
+    i1 = np.floor(np.asarray(hi) / r).astype(np.int64)
+    state = (view.state if which == "occupied" else view.state_reference)[layer]
+    cls = view.cls[layer]
+    inside = np.all((yz >= i0) & (yz <= i1), axis=1)
+    yz, state, cls = yz[inside] - i0, state[inside], cls[inside]
+    rgb = np.full((int(i1[1] - i0[1] + 1), int(i1[0] - i0[0] + 1), 3), 0.85)   # no evidence
+    rgb[yz[state == 0, 1], yz[state == 0, 0]] = 0.5                              # unknown
+    rgb[yz[state == 1, 1], yz[state == 1, 0]] = 1.0                              # free
+    occ = state == 2
+    rgb[yz[occ, 1], yz[occ, 0]] = class_colors(view.probs.shape[1], present)[cls[occ]] / 255.0
+    extent = (i0[0] * r, (i1[0] + 1) * r, i0[1] * r, (i1[1] + 1) * r)
+    return rgb, extent
+
+
+def plot_vertical_slices(views: dict, x: float, lo, hi, width: float = 7.0, panel_height=None):
+    """Vertical cuts (:func:`vertical_slice`) of several maps at the same ``x`` [m], one above the
+    other, over the (y, z) box ``lo``..``hi`` [m], with one legend of the classes in the cuts.
+
+    Voxels are drawn square; ``width`` [inch] is the figure's width.
+    """
+    import matplotlib.pyplot as plt
+    from matplotlib.patches import Patch
+    from .palette import class_names
+    r = next(iter(views.values())).resolution
+    k = int(np.floor(x / r))
+    box_lo, box_hi = np.r_[k * r, lo], np.r_[(k + 1) * r, hi]
+    cut = {t: (np.all((w.centres >= box_lo) & (w.centres <= box_hi), axis=1), w) for t, w in views.items()}
+    present = sorted(set(np.concatenate([w.cls[m & (w.state == 2)] for m, w in cut.values()]).tolist()) - {0})
+    states = set(np.concatenate([w.state[m] for m, w in cut.values()]).tolist())
+    n = len(views)
+    aspect = (hi[1] - lo[1]) / (hi[0] - lo[0])
+    ph = panel_height or (width - 0.6) * aspect + 0.45
+    fig, axes = plt.subplots(n, 1, figsize=(width, ph * n + 0.75), squeeze=False,
+                             layout="constrained", sharex=True)
+    for ax, (title, v) in zip(axes[:, 0], views.items()):
+        rgb, ext = vertical_slice(v, x, "occupied", lo=lo, hi=hi, present=present)
+        ax.imshow(rgb, origin="lower", extent=ext, interpolation="nearest")
+        ax.set_title(title, fontsize=9.5)
+        ax.set_ylabel("z [m]")
+        ax.set_aspect("equal")
+    axes[-1, 0].set_xlabel("y [m]")
+    K = next(iter(views.values())).probs.shape[1]
+    pal, names = class_colors(K, present) / 255.0, class_names(K)
+    handles = [Patch(color=pal[c], label=names[c]) for c in present]
+    if 1 in states:
+        handles.append(Patch(facecolor="white", edgecolor="0.3", label="free"))
+    if 0 in states:
+        handles.append(Patch(color="0.5", label="unknown"))
+    handles.append(Patch(color="0.85", label="no evidence"))
+    fig.legend(handles=handles, loc="outside lower center",
+               ncol=len(handles) if len(handles) <= 8 else 6,
+               fontsize=8.5, frameon=False, handlelength=1.2, columnspacing=1.0)
+    return fig
 
 
 def plot_slices(panels: dict, z: float, cam: Camera, width: float = 4.0):
