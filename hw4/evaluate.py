@@ -491,6 +491,41 @@ def paired_difference(boot: dict, a: int, b: int, metric: str = "auc",
             "p_le0": float(np.mean(d <= 0))}
 
 
+def table_difference(boot: dict, a: int, b: int, metric: str = "auc", digits: int = 3,
+                     level: float = 0.95) -> dict:
+    """:func:`paired_difference` as a table's reader computes it: from the printed entries.
+
+    The estimate is ``round(metric[a], digits) - round(metric[b], digits)``, the difference of the
+    two scores as a table printing ``digits`` decimals shows them (``boot`` from
+    :func:`bootstrap_scores` with ``common=False`` holds exactly the tables' scores); the interval
+    is that of the paired replicates. ``inside`` tells whether the printed estimate lies within the
+    interval rounded to ``digits`` decimals, so that a text quoting both never contradicts itself.
+
+    Returns
+    -------
+    dict ``diff``, ``lo``, ``hi``, ``p_le0`` (as :func:`paired_difference`) and ``inside`` (bool).
+    """
+    d = paired_difference(boot, a, b, metric, level)
+    est = boot[metric]
+    diff = round(round(float(est[a]), digits) - round(float(est[b]), digits), digits)
+    inside = round(d["lo"], digits) <= diff <= round(d["hi"], digits)
+    return {**d, "diff": diff, "inside": bool(inside)}
+
+
+def threshold_scores(m, samples: HeldOut, threshold: float) -> dict:
+    """A map read at an occupancy threshold: ``occupied_recall`` (scored end points with
+    :func:`occupancy_score` > ``threshold``) and ``free_accuracy`` (scored free samples with a
+    score <= ``threshold``); for a semantic map the score is 1 - P(free)."""
+    cell = m.grid.nearest_cell(samples.points)
+    scored = cell >= 0
+    scored[scored] = np.asarray(m.observed, dtype=bool).reshape(-1)[cell[scored]]
+    called = occupancy_score(m)[cell[scored]] > threshold
+    truth = samples.occupied[scored]
+    return {"threshold": float(threshold),
+            "occupied_recall": float(called[truth].mean()) if truth.any() else np.nan,
+            "free_accuracy": float((~called[~truth]).mean()) if (~truth).any() else np.nan}
+
+
 def ends_only(cm) -> np.ndarray:
     """The confusion matrix with the free-space row zeroed: end points only (what IoU uses)."""
     cm = np.array(cm, copy=True)

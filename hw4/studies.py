@@ -306,3 +306,41 @@ def tune_free_weight(grid_size: float = 0.135, factors=FREE_WEIGHTS,
         rows.append(row)
     best = max(rows, key=lambda r: r[metric])   # max keeps the first of equal scores
     return best["factor"], rows
+
+
+def tune_threshold(task: int = 4, grid_size: float = 0.135, split: ev.Split | None = None,
+                   every: int = 10, offset: int = 4, digits: int = 2, **kw) -> tuple:
+    """Choose the occupancy threshold a planner should read a map at, on validation scans.
+
+    As :func:`tune_free_weight`: one scan in ``every`` of the *mapping* scans of ``split`` is set
+    aside (the held-out test scans are never seen), the map of ``task`` is built from the rest
+    (``kw``: its options, e.g. ``beams="all", nearest_poses=None``), and the threshold ``t`` on
+    :func:`hw4.evaluate.occupancy_score` (1 - P(free) for a semantic map) that maximises the
+    balanced accuracy on the validation samples, (occupied recall + free accuracy) / 2, is taken
+    half-way between two distinct scores and rounded to ``digits`` decimals (the number the text
+    prints; the map is read as occupied where its score is > ``t``).
+
+    Returns
+    -------
+    (t, row): the threshold [probability] and the validation scores at ``t``
+    (:func:`hw4.evaluate.threshold_scores` plus ``n_val``, ``balanced``).
+    """
+    from .tasks import build_map
+    split = split or ev.intel_split()
+    data = ev.mapping_data(task, split)
+    fit_idx, val_idx = ev.split_scans(len(data.scans), every, offset)
+    fit, held = ev.subset(data, fit_idx), ev.subset(data, val_idx)
+    samples = ev.held_out_samples(held, np.arange(len(held.scans)), split.samples.step,
+                                  split.samples.margin)
+    m = build_map(task, grid_size, data=fit, **kw)
+    cell = m.grid.nearest_cell(samples.points)
+    scored = cell >= 0
+    scored[scored] = np.asarray(m.observed, dtype=bool).reshape(-1)[cell[scored]]
+    fpr, tpr, thr = ev.roc_curve(ev.occupancy_score(m)[cell[scored]], samples.occupied[scored])
+    i = int(np.argmax(tpr[1:] - fpr[1:]))          # point i + 1: score >= thr[i] is occupied
+    below = thr[i + 1] if i + 1 < len(thr) else 0.0
+    t = round(float((thr[i] + below) / 2), digits)
+    row = ev.threshold_scores(m, samples, t)
+    row["n_val"] = len(val_idx)
+    row["balanced"] = (row["occupied_recall"] + row["free_accuracy"]) / 2
+    return t, row

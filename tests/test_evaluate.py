@@ -384,3 +384,22 @@ def test_label_changes_between_frames_by_hand():
     (r,) = label_changes({10: (None, a), 20: (None, b)})
     assert (r["n_from"], r["n_to"], r["region_both"]) == (10, 20, 2)
     assert r["swapped"] == 0.5 and r["to_free"] == pytest.approx(1 / 3) and r["mixed_swapped"] == 1.0
+
+
+def test_table_difference_is_that_of_the_printed_scores_and_threshold_scores_read_the_map():
+    rng = np.random.default_rng(5)
+    a = _toy_map([1] * 6, rng.uniform(0, 1, 6))
+    b = _toy_map([1] * 6, rng.uniform(0, 1, 6))
+    pts = rng.uniform(-0.4, 2.4, (80, 2)) * [1, 0.5]
+    occ = rng.uniform(size=80) < 0.4
+    s = ev.HeldOut(pts, occ, np.zeros(80, int), rng.integers(0, 9, 80))
+    boot = ev.bootstrap_scores([a, b], s, n_boot=40, seed=1, common=False)
+    d = ev.table_difference(boot, 0, 1, "auc", digits=3)
+    assert d["diff"] == round(round(boot["auc"][0], 3) - round(boot["auc"][1], 3), 3)
+    assert d["inside"] == (round(d["lo"], 3) <= d["diff"] <= round(d["hi"], 3))
+    assert (d["lo"], d["hi"]) == tuple(ev.paired_difference(boot, 0, 1)[k] for k in ("lo", "hi"))
+    # read at 0.5, threshold_scores gives score_map's occupied recall and free accuracy
+    r, t = ev.score_map(a, s, keep_roc=False), ev.threshold_scores(a, s, 0.5)
+    assert t["occupied_recall"] == pytest.approx(r["occupied_recall"])
+    assert t["free_accuracy"] == pytest.approx(r["free_accuracy"])
+    assert ev.threshold_scores(a, s, -1.0)["occupied_recall"] == 1.0
