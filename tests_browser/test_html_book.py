@@ -190,6 +190,11 @@ def test_page_wide(driver, book_url, shots, page):
         button.click()
         time.sleep(0.4)
         assert "pst-sidebar-hidden" not in sidebar.get_attribute("class")
+    wide_code = driver.execute_script(
+        "return Array.from(document.querySelectorAll('.bd-article div.cell_input pre'))"
+        ".filter(p => p.offsetParent && p.scrollWidth > p.clientWidth + 1)"
+        ".map(p => p.textContent.split('\\n').reduce((a, b) => a.length > b.length ? a : b))")
+    assert not wide_code, f"{page}: code cells wider than the column at {WIDE} px: {wide_code}"
     errors = _console_errors(driver)
     assert not errors, f"{page}: console errors at {WIDE} px: {errors}"
     outside = _nonlocal(_requests(driver))

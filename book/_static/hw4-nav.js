@@ -13,8 +13,9 @@
  *    wrapped in a link to its own file, reachable with the keyboard; icons and logos are not.
  * 4. A display equation wider than its column gets its number on the line below (hw4-book.css),
  *    measured again when the window changes width; what is still wider scrolls in its own box.
- * 5. Line breaks: punctuation right after inline maths stays on the formula's line, and a short
- *    inline literal (an option such as --video) is never broken.
+ * 5. Line breaks: an inline formula stays on one line with the bracket before it, the unit and
+ *    punctuation after it, and the value glued after a formula ending in "=" ("l = 0.2 m,"); a
+ *    short inline literal (an option such as --video) is never broken.
  * 6. Video players are one control bar taller than their frame (the frame at the top, see
  *    hw4-book.css), so the paused player's controls do not cover the plot.
  * 7. The header's download menu offers the whole book's PDF (the link at the foot of the chapter
@@ -136,23 +137,72 @@
     });
   }
 
-  function keepPunctuation() {
+  // Split the text node `node` at `n` characters from its start (or its end when n < 0) and
+  // return the part split off (a new text node before or after `node`).
+  function splitText(node, n) {
+    if (n >= 0) {
+      var head = document.createTextNode(node.nodeValue.slice(0, n));
+      node.nodeValue = node.nodeValue.slice(n);
+      node.parentNode.insertBefore(head, node);
+      return head;
+    }
+    var tail = document.createTextNode(node.nodeValue.slice(node.nodeValue.length + n));
+    node.nodeValue = node.nodeValue.slice(0, node.nodeValue.length + n);
+    node.parentNode.insertBefore(tail, node.nextSibling);
+    return tail;
+  }
+
+  function endsWithEquals(math) {
+    var mml = math.querySelector("mjx-assistive-mml math, math");
+    var text = mml ? mml.textContent : math.textContent.replace(/\\\)\s*$/, "");
+    return /=\s*$/.test(text);
+  }
+
+  function keepTogether() {
     var maths = document.querySelectorAll(".bd-article span.math");
     Array.prototype.forEach.call(maths, function (math) {
-      var next = math.nextSibling;
-      if (!next || next.nodeType !== 3) {
-        return;
+      var parts = [math];
+      var prev = math.previousSibling;
+      if (prev && prev.nodeType === 3 && /[(\[]$/.test(prev.nodeValue)) {
+        parts.unshift(splitText(prev, -1));       // "(" right before the formula
       }
-      var m = /^[.,;:!?)\u2019]+/.exec(next.nodeValue);
-      if (!m) {
+      var next = math.nextSibling;
+      if (endsWithEquals(math) && next) {          // "l =" and the value after it
+        if (next.nodeType === 3 && /^\s+$/.test(next.nodeValue) && next.nextSibling &&
+            next.nextSibling.nodeType === 1) {       // a glued value: " " then an element
+          parts.push(next, next.nextSibling);
+          next = next.nextSibling.nextSibling;
+        } else if (next.nodeType === 1) {
+          parts.push(next);
+          next = next.nextSibling;
+        } else if (next.nodeType === 3) {           // a typed value: " 0.2"
+          var v = /^\s*[\u2212+-]?[\d.,]+/.exec(next.nodeValue);
+          if (v) {
+            parts.push(splitText(next, v[0].length));
+          }
+        }
+      }
+      if (next && next.nodeType === 3) {
+        var m = /^(\u00a0[^\s.,;:!?()]+)?[.,;:!?)\u2019]*/.exec(next.nodeValue);
+        if (m[0]) {                                // "\u00a0m" (a unit), then punctuation
+          parts.push(splitText(next, m[0].length));
+        }
+      }
+      if (parts.length === 1) {
         return;
       }
       var wrap = document.createElement("span");
       wrap.className = "hw4-math-nowrap";
-      math.parentNode.insertBefore(wrap, math);
-      wrap.appendChild(math);
-      wrap.appendChild(document.createTextNode(m[0]));
-      next.nodeValue = next.nodeValue.slice(m[0].length);
+      parts[0].parentNode.insertBefore(wrap, parts[0]);
+      parts.forEach(function (node) {
+        wrap.appendChild(node);
+      });
+    });
+    var labels = document.querySelectorAll(".bd-article table td:first-child");
+    Array.prototype.forEach.call(labels, function (cell) {
+      if (cell.textContent.trim().length <= 14) {
+        cell.classList.add("hw4-nowrap");
+      }
     });
     var literals = document.querySelectorAll(".bd-article code.literal");
     Array.prototype.forEach.call(literals, function (code) {
@@ -250,7 +300,7 @@
     forward(".secondary-toggle", "pst-secondary-sidebar-modal");
     DRAWERS.forEach(closeOnLink);
     linkImages();
-    keepPunctuation();
+    keepTogether();
     sizeVideos();
     bookPdfButton();
     veilInteractive();
