@@ -24,3 +24,28 @@ def test_options_seconds_keys_match_the_options_study():
     assert all(np.isfinite(v) and v > 0 for v in secs.values())
     with pytest.raises(InputError):
         studies.options_seconds(grid_size=0.5, tasks=(1,), options=options, repeats=0)
+
+
+def test_tune_threshold_maximises_balanced_accuracy_on_the_validation_scans():
+    """The chosen threshold gives the largest (occupied recall + free accuracy) / 2 of any
+    threshold on the validation samples (rebuilt here from the same split), and the held-out
+    test scans never enter."""
+    from hw4 import evaluate as ev
+    from hw4.tasks import build_map
+    split = ev.intel_split()
+    t, row = studies.tune_threshold(task=1, grid_size=0.27, split=split, digits=12)
+    assert 0.0 <= t <= 1.0 and row["threshold"] == t
+    data = ev.mapping_data(1, split)
+    fit_idx, val_idx = ev.split_scans(len(data.scans), 10, 4)
+    assert row["n_val"] == len(val_idx)
+    fit, held = ev.subset(data, fit_idx), ev.subset(data, val_idx)
+    samples = ev.held_out_samples(held, np.arange(len(held.scans)), split.samples.step,
+                                  split.samples.margin)
+    m = build_map(1, 0.27, data=fit)
+    scores = np.unique(ev.occupancy_score(m))
+    candidates = np.concatenate([[0.0, 1.0], (scores[1:] + scores[:-1]) / 2])
+    best = max((lambda r: (r["occupied_recall"] + r["free_accuracy"]) / 2)(
+        ev.threshold_scores(m, samples, c)) for c in candidates[:: max(1, len(candidates) // 400)])
+    assert row["balanced"] >= best - 1e-12
+    again = ev.threshold_scores(m, samples, t)
+    assert (again["occupied_recall"] + again["free_accuracy"]) / 2 == row["balanced"]
