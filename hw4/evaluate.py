@@ -293,6 +293,15 @@ def occupancy_score(m) -> np.ndarray:
     return mean.reshape(-1)
 
 
+def scored_cells(m, samples: HeldOut):
+    """The cell of each sample (its nearest cell centre, -1 outside the map) and whether the
+    sample is scored there (inside the map, in a cell with evidence): ``(cell, scored)``."""
+    cell = m.grid.nearest_cell(samples.points)
+    scored = cell >= 0
+    scored[scored] = np.asarray(m.observed, dtype=bool).reshape(-1)[cell[scored]]
+    return cell, scored
+
+
 def score_map(m, samples: HeldOut, keep_roc: bool = True) -> dict:
     """Score one built map on held-out samples.
 
@@ -321,10 +330,7 @@ def score_map(m, samples: HeldOut, keep_roc: bool = True) -> dict:
         counting as a miss), ``confusion`` (7, 7) counts over all scored samples, rows true
         class (labels 1..6 then free), columns predicted.
     """
-    cell = m.grid.nearest_cell(samples.points)
-    observed = np.asarray(m.observed, dtype=bool).reshape(-1)
-    scored = cell >= 0
-    scored[scored] = observed[cell[scored]]
+    cell, scored = scored_cells(m, samples)
     occ = samples.occupied
     out = {
         "n_samples": int(len(cell)),
@@ -398,12 +404,7 @@ def bootstrap_scores(maps, samples: HeldOut, n_boot: int = 200, seed: int = 0,
     (n_boot, n_maps) under ``"<metric>_replicates"``; ``replicates`` is an alias of
     ``auc_replicates``; ``n_common`` (samples scored by every map).
     """
-    cells = [m.grid.nearest_cell(samples.points) for m in maps]
-    scored = []
-    for m, c in zip(maps, cells):
-        ok = c >= 0
-        ok[ok] = np.asarray(m.observed, bool).reshape(-1)[c[ok]]
-        scored.append(ok)
+    cells, scored = zip(*(scored_cells(m, samples) for m in maps))
     shared = np.logical_and.reduce(scored)
     # the samples resampled (``use``) and, within them, those each map is scored on
     use = shared if common else np.logical_or.reduce(scored)
@@ -516,9 +517,7 @@ def threshold_scores(m, samples: HeldOut, threshold: float) -> dict:
     """A map read at an occupancy threshold: ``occupied_recall`` (scored end points with
     :func:`occupancy_score` > ``threshold``) and ``free_accuracy`` (scored free samples with a
     score <= ``threshold``); for a semantic map the score is 1 - P(free)."""
-    cell = m.grid.nearest_cell(samples.points)
-    scored = cell >= 0
-    scored[scored] = np.asarray(m.observed, dtype=bool).reshape(-1)[cell[scored]]
+    cell, scored = scored_cells(m, samples)
     called = occupancy_score(m)[cell[scored]] > threshold
     truth = samples.occupied[scored]
     return {"threshold": float(threshold),

@@ -267,6 +267,24 @@ def free_sample_study(grid_size: float = 0.135, task: int = 4, variants=FREE_VAR
 FREE_WEIGHTS = (1.0, 0.5, 0.25, 0.1, 0.05, 0.025, 0.01)  # free-evidence factors tried by tune_free_weight
 
 
+def validation_split(task: int, split: ev.Split | None = None, every: int = 10, offset: int = 4):
+    """The mapping scans of ``split`` (the held-out test scans never enter) cut into scans to
+    build from and validation scans, one in ``every`` (index ``offset`` mod ``every``).
+
+    Returns
+    -------
+    (fit, samples, n_val): the task's data of the scans to build from, the validation scans'
+    held-out samples (same step and margin as the split) and the number of validation scans.
+    """
+    split = split or ev.intel_split()
+    data = ev.mapping_data(task, split)
+    fit_idx, val_idx = ev.split_scans(len(data.scans), every, offset)
+    held = ev.subset(data, val_idx)
+    samples = ev.held_out_samples(held, np.arange(len(held.scans)), split.samples.step,
+                                  split.samples.margin)
+    return ev.subset(data, fit_idx), samples, len(val_idx)
+
+
 def tune_free_weight(grid_size: float = 0.135, factors=FREE_WEIGHTS,
                      split: ev.Split | None = None, every: int = 10, offset: int = 4,
                      metric: str = "miou_all") -> tuple:
@@ -287,19 +305,14 @@ def tune_free_weight(grid_size: float = 0.135, factors=FREE_WEIGHTS,
     (best, rows): the chosen factor (float) and one dict per factor (``factor``, ``n_val`` scans,
     ``n_fit`` scans, ``miou_all`` and the validation scores, without ROC curves).
     """
-    split = split or ev.intel_split()
-    data = ev.mapping_data(4, split)
-    fit_idx, val_idx = ev.split_scans(len(data.scans), every, offset)
-    fit, held = ev.subset(data, fit_idx), ev.subset(data, val_idx)
-    samples = ev.held_out_samples(held, np.arange(len(held.scans)), split.samples.step,
-                                  split.samples.margin)
+    fit, samples, n_val = validation_split(4, split, every, offset)
     grid = Grid(grid_size, n_classes=ev.N_LABELS + 1)
     base = count_evidence(grid, fit.poses, fit.scans, model="continuous", semantic=True)
     rows = []
     for factor in factors:
         counts = base.copy()
         counts[:, -1] *= factor
-        row = {"factor": float(factor), "n_fit": len(fit_idx), "n_val": len(val_idx)}
+        row = {"factor": float(factor), "n_fit": len(fit.scans), "n_val": n_val}
         row.update(ev.score_map(map_from_counts(grid, counts, True), samples, keep_roc=False))
         row["miou_all"] = float(np.nanmean(ev.iou_from_confusion(row["confusion"],
                                                                   np.arange(ev.N_LABELS + 1))))
@@ -326,21 +339,14 @@ def tune_threshold(task: int = 4, grid_size: float = 0.135, split: ev.Split | No
     (:func:`hw4.evaluate.threshold_scores` plus ``n_val``, ``balanced``).
     """
     from .tasks import build_map
-    split = split or ev.intel_split()
-    data = ev.mapping_data(task, split)
-    fit_idx, val_idx = ev.split_scans(len(data.scans), every, offset)
-    fit, held = ev.subset(data, fit_idx), ev.subset(data, val_idx)
-    samples = ev.held_out_samples(held, np.arange(len(held.scans)), split.samples.step,
-                                  split.samples.margin)
+    fit, samples, n_val = validation_split(task, split, every, offset)
     m = build_map(task, grid_size, data=fit, **kw)
-    cell = m.grid.nearest_cell(samples.points)
-    scored = cell >= 0
-    scored[scored] = np.asarray(m.observed, dtype=bool).reshape(-1)[cell[scored]]
+    cell, scored = ev.scored_cells(m, samples)
     fpr, tpr, thr = ev.roc_curve(ev.occupancy_score(m)[cell[scored]], samples.occupied[scored])
     i = int(np.argmax(tpr[1:] - fpr[1:]))          # point i + 1: score >= thr[i] is occupied
     below = thr[i + 1] if i + 1 < len(thr) else 0.0
     t = round(float((thr[i] + below) / 2), digits)
     row = ev.threshold_scores(m, samples, t)
-    row["n_val"] = len(val_idx)
+    row["n_val"] = n_val
     row["balanced"] = (row["occupied_recall"] + row["free_accuracy"]) / 2
     return t, row

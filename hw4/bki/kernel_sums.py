@@ -20,7 +20,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from ..kernel import _DEGREE, _PIECES, _pieces
+from ..kernel import _PIECES, _pieces
 
 
 @njit(cache=True, nogil=True)
@@ -103,7 +103,6 @@ def kernel_sums(points: np.ndarray, labels: np.ndarray, base: np.ndarray, lo: np
     dims = np.ascontiguousarray(dims, dtype=np.int64)
     ell2 = float(ell) ** 2
     table = _pieces()
-    assert table.shape == (_PIECES, _DEGREE + 1)
     args = (points, labels, base, lo, dims, int(R), float(resolution), ell2, _PIECES / float(ell),
             float(sf2), table)
     n_box = int(np.prod(dims))
