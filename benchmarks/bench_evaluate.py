@@ -12,7 +12,8 @@ from __future__ import annotations
 import argparse
 import time
 
-from hw4 import book, evaluate as ev
+from hw4 import book
+from hw4.evaluation import evaluate as ev
 from hw4.tasks import load_task_data
 
 TARGET_SECONDS = 60.0

@@ -24,7 +24,7 @@ from pathlib import Path
 import numpy as np
 from scipy.io import loadmat
 
-from hw4.data import INTEL, INTEL_SEMANTIC, ensure
+from hw4.core.data import INTEL, INTEL_SEMANTIC, ensure
 from hw4.tasks import build_map, load_task_data, task_name
 
 ROOT = Path(__file__).resolve().parent.parent

@@ -4,20 +4,14 @@ from __future__ import annotations
 import argparse
 import sys
 
-from .errors import InputError
-
-
-class _Parser(argparse.ArgumentParser):
-    """argparse whose usage errors are one line, ``error: PROG: MESSAGE``, exit status 2."""
-
-    def error(self, message):
-        self.exit(2, f"error: {self.prog}: {message} (see {self.prog} --help).\n")
+from .core.errors import InputError
+from .core.parser import OneLineParser
 
 
 def parser() -> argparse.ArgumentParser:
     from . import cli, package
     from .bki import cli as bki_cli
-    p = _Parser(
+    p = OneLineParser(
         prog="python -m hw4",
         description="Mapping with counting sensor models (NA 568 HW4): build the maps of tasks "
                     "1-4, run 3D semantic BKI (task 5), fetch data, package a submission.")

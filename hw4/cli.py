@@ -6,7 +6,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .errors import InputError
+from .core.errors import InputError
 
 
 def _grid_size(text: str) -> float:
@@ -60,7 +60,7 @@ def register(sub) -> None:
 
 
 def fetch_data(args) -> int:
-    from .data import ensure_all
+    from .core.data import ensure_all
     paths = ensure_all(args.only)
     for p in paths:
         print(f"ok  {p}")
@@ -72,8 +72,8 @@ def run_task(args) -> int:
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
-    from . import plotting
-    from .atomic import Outputs
+    from .core import plotting
+    from .core.atomic import Outputs
     from .tasks import build_map, model_class, task_name
 
     kw = {"nearest_poses": args.nearest_poses, "progress": True}

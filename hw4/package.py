@@ -22,7 +22,7 @@ imports another face imports it as a top-level module, and absolute ``hw4.x`` im
 the bundle is imported in a fresh interpreter with ``hw4`` made unimportable, so a submission
 that would fail to import is never written.
 
-Errors raise :class:`hw4.errors.InputError` with one sentence.
+Errors raise :class:`hw4.core.errors.InputError` with one sentence.
 """
 from __future__ import annotations
 
@@ -38,7 +38,7 @@ import tarfile
 import tempfile
 from pathlib import Path
 
-from .errors import InputError
+from .core.errors import InputError
 
 PACKAGE_DIR = Path(__file__).resolve().parent
 PROJECT_ROOT = PACKAGE_DIR.parent
@@ -119,7 +119,7 @@ def _targets(node: ast.AST, module: str, path: Path) -> list[str]:
             absolute = node.module or ""
         if absolute == "hw4" or absolute.startswith("hw4."):
             out.append(absolute)
-            for alias in node.names:  # `from . import data` imports the submodule hw4.data
+            for alias in node.names:  # `from . import data` imports the submodule hw4.core.data
                 if _module_file(f"{absolute}.{alias.name}") is not None:
                     out.append(f"{absolute}.{alias.name}")
     return out
@@ -375,7 +375,7 @@ def build_package(uniqname: str, pdf: str | Path | None = None, out: str | Path 
     videos : list of paths, optional
         Videos for ``NAME_hw4/videos/`` (default: :data:`VIDEOS`).
     """
-    from .atomic import Outputs
+    from .core.atomic import Outputs
 
     name = validate_uniqname(uniqname)
     pdf_path = find_pdf(pdf if pdf is not None else build_named_pdf(name))
@@ -398,7 +398,7 @@ def _versions() -> dict:
 
 def _write_package(name: str, pdf_path: Path, tmp: Path, o, same_pdf: bool,
                    videos=()) -> None:
-    """Bundle, check and write the two attachments through ``o`` (:class:`hw4.atomic.Outputs`)."""
+    """Bundle, check and write the two attachments through ``o`` (:class:`hw4.core.atomic.Outputs`)."""
     folder = tmp / f"{name}_hw4"
     write_bundle(folder)
     (folder / "README.txt").write_text(README.format(

@@ -7,8 +7,8 @@ from __future__ import annotations
 
 import time
 
-from . import data as _data
-from .errors import InputError
+from .core import data as _data
+from .core.errors import InputError
 from .ogm_CSM import ogm_CSM
 from .ogm_continuous_CSM import ogm_continuous_CSM
 from .ogm_S_CSM import ogm_S_CSM

@@ -9,7 +9,7 @@ A template map is built as the students' files are used::
 
 and carries the attributes the course's ``utils.py`` plotting code reads (``map['occMap'].data``,
 ``map['size']``, ``grid_size``, ``range_x``, ``range_y``, ``num_classes``). The work is done by
-:func:`hw4.evidence.count_evidence`; this class only converts data on the way in and fills
+:func:`hw4.core.evidence.count_evidence`; this class only converts data on the way in and fills
 ``self.map`` on the way out.
 """
 from __future__ import annotations
@@ -19,13 +19,13 @@ import math
 import numpy as np
 from scipy.spatial import KDTree
 
-from . import data as _data
-from .errors import InputError
-from .evidence import SAMPLE_STEP, count_evidence
-from .grid import RANGE_X, RANGE_Y, GRID_SIZE, Grid, check_grid, check_range
-from .kernel import LENGTH, SIGMA0
-from .posterior import beta_mean_variance, dirichlet_mean_variance
-from .sensor import N_BEAMS, Z_MAX
+from .core import data as _data
+from .core.errors import InputError
+from .core.evidence import SAMPLE_STEP, count_evidence
+from .core.grid import RANGE_X, RANGE_Y, GRID_SIZE, Grid, check_grid, check_range
+from .core.kernel import LENGTH, SIGMA0
+from .core.posterior import beta_mean_variance, dirichlet_mean_variance
+from .core.sensor import N_BEAMS, Z_MAX
 
 PRIOR = 1e-3  # alpha_0 = beta_0 (per class for the Dirichlet): small and uninformative
 MIN_PRIOR = 1e-100  # smaller priors underflow in the variance alpha beta / (s^2 (s + 1))
@@ -158,7 +158,7 @@ class CountingSensorMap:
         self._summarise()
 
     def evidence_options(self) -> dict:
-        """Keyword arguments for :func:`hw4.evidence.count_evidence` from this map's parameters."""
+        """Keyword arguments for :func:`hw4.core.evidence.count_evidence` from this map's parameters."""
         opts = dict(model="continuous" if self.continuous else "discrete", semantic=self.semantic,
                     nearest_poses=self.nearest_poses, z_max=self.z_max, w_beam=self.w_beam,
                     w_obstacle=2 * self.grid_size, progress=self.progress)

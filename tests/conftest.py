@@ -23,7 +23,7 @@ def model_class(model: str):
 @functools.lru_cache(maxsize=None)
 def intel_raw(semantic: bool):
     """(robotPose, laserScan) of the Intel data exactly as scipy.io.loadmat returns them."""
-    from hw4.data import INTEL, INTEL_SEMANTIC, ensure
+    from hw4.core.data import INTEL, INTEL_SEMANTIC, ensure
     raw = loadmat(ensure(INTEL_SEMANTIC if semantic else INTEL))
     return raw["robotPose"], raw["laserScan"]
 

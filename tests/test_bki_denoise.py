@@ -8,7 +8,7 @@ from hw4.bki import BKIConfig, VoxelMap
 from hw4.bki import semantic_eval as se
 from hw4.bki.noise import CONFUSION, SimulatedSegmenter
 from hw4.bki.scan import Scan
-from hw4.errors import InputError
+from hw4.core.errors import InputError
 
 
 def test_confusion_and_iou_of_a_hand_made_case():

@@ -8,7 +8,7 @@ from test_bki_kitti import write_sequence
 from hw4.bki import Scan, load_config, map_scans, scan_source, validate_scan
 from hw4.bki.cli import main
 from hw4.bki.kitti import SemanticKITTISequence
-from hw4.errors import InputError
+from hw4.core.errors import InputError
 
 PCD = """VERSION 0.7
 FIELDS x y z label

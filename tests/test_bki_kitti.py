@@ -8,9 +8,9 @@ import pytest
 
 from hw4.bki import build_map, load_config, scan_source
 from hw4.bki.cli import register
-from hw4.data import ensure_all
+from hw4.core.data import ensure_all
 from hw4.bki.kitti import COLORS, LEARNING_MAP, SemanticKITTISequence, learning_labels, read_bin, read_label
-from hw4.errors import InputError
+from hw4.core.errors import InputError
 
 # velodyne -> camera of KITTI odometry sequences 04-10 (as published with the dataset)
 TR = np.array([[-1.857739385241e-03, -9.999659513510e-01, -8.039975204516e-03, -4.784029760483e-03],

@@ -6,7 +6,7 @@ import pytest
 
 from hw4.bki.pcd import read_labelled_scan, read_pcd
 from hw4.bki.pipeline import toy_paths
-from hw4.errors import InputError
+from hw4.core.errors import InputError
 
 HEADER = """# .PCD v0.7 - Point Cloud Data file format
 VERSION 0.7

@@ -9,7 +9,7 @@ from hw4.bki import reference as ref
 from hw4.bki import semantic_eval as se
 from hw4.bki.kitti import SemanticKITTISequence
 from hw4.bki.training import training_data
-from hw4.errors import InputError
+from hw4.core.errors import InputError
 
 
 def rigid(rng):

@@ -6,7 +6,7 @@ import pytest
 
 from hw4.bki import Scan, load_config, scan_source, training_data, validate_scan
 from hw4.bki.training import downsample, free_samples
-from hw4.errors import InputError
+from hw4.core.errors import InputError
 
 
 def test_toy_training_counts_are_12363_hits_and_22294_free():

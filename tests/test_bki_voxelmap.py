@@ -10,9 +10,9 @@ from bki_literal import sparse_kernel as literal_kernel
 
 from hw4.bki import VoxelMap
 from hw4.bki.voxelmap import FREE, OCCUPIED, UNKNOWN, kernel_reach
-from hw4.kernel import sparse_kernel
-from hw4.kernel import sparse_kernel_inside as fast_kernel
-from hw4.kernel import sparse_kernel_pieces
+from hw4.core.kernel import sparse_kernel
+from hw4.core.kernel import sparse_kernel_inside as fast_kernel
+from hw4.core.kernel import sparse_kernel_pieces
 
 SF2, ELL = 10.0, 0.3
 

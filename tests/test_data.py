@@ -4,8 +4,8 @@ import numpy as np
 import pytest
 from scipy.io import savemat
 
-from hw4 import data
-from hw4.errors import InputError
+from hw4.core import data
+from hw4.core.errors import InputError
 
 NAME = data.INTEL
 

@@ -2,8 +2,8 @@
 import numpy as np
 import pytest
 
-from hw4.errors import InputError
-from hw4.grid import Grid
+from hw4.core.errors import InputError
+from hw4.core.grid import Grid
 from hw4.ogm_CSM import ogm_CSM
 from hw4.ogm_S_CSM import ogm_S_CSM
 from hw4.ogm_continuous_CSM import ogm_continuous_CSM

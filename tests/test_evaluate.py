@@ -7,11 +7,12 @@ from types import SimpleNamespace
 import numpy as np
 import pytest
 
-from hw4 import book, evaluate as ev
-from hw4.data import IntelData
-from hw4.errors import InputError
-from hw4.evidence import count_evidence
-from hw4.grid import Grid
+from hw4 import book
+from hw4.evaluation import evaluate as ev
+from hw4.core.data import IntelData
+from hw4.core.errors import InputError
+from hw4.core.evidence import count_evidence
+from hw4.core.grid import Grid
 
 
 # ---------------------------------------------------------------- AUC and ROC, exact cases
@@ -235,14 +236,15 @@ def test_sigma_scaling_used_by_the_kernel_study_is_exact():
 def test_growth_path_stands_apart_from_every_map_colour():
     """The robot's path is drawn over class maps: far from every class colour, free and unknown."""
     import matplotlib.colors as mc
-    from hw4 import growth, plotting
+    from hw4.evaluation import growth
+    from hw4.core import plotting
     path = np.array(mc.to_rgb(growth.PATH_COLOR))
     colours = np.vstack([plotting.CLASS_COLORS, plotting.FREE_COLOR, plotting.UNKNOWN_COLOR])
     assert np.linalg.norm(colours - path, axis=1).min() > 0.5
 
 
 def test_incremental_growth_is_the_batch_map():
-    from hw4.growth import incremental_counts
+    from hw4.evaluation.growth import incremental_counts
     from hw4.tasks import load_task_data
     d = load_task_data(4)
     d = IntelData(d.poses[:60], d.scans[:60])
@@ -336,7 +338,7 @@ def test_bootstrap_scores_match_score_map_without_resampling_and_pair_the_draws(
 
 
 def test_closest_free_sample_matches_the_one_beam_profile():
-    from hw4.illustrate import beam_profile
+    from hw4.book.illustrate import beam_profile
     g = 0.05
     grid = Grid(g, (-0.5, 3.0), (-0.5, 0.5))
     z = 2.0
@@ -361,7 +363,7 @@ def test_closest_free_sample_matches_the_one_beam_profile():
 
 
 def test_free_sample_study_scales_only_the_free_column():
-    from hw4 import studies
+    from hw4.evaluation import studies
     sp = ev.intel_split()
     variants = (studies.FREE_VARIANTS[0], studies.FREE_VARIANTS[3])   # package, free x 0.5
     rows, maps, boot = studies.free_sample_study(grid_size=0.5, variants=variants, n_boot=5)
@@ -376,7 +378,7 @@ def test_free_sample_study_scales_only_the_free_column():
 
 
 def test_label_changes_between_frames_by_hand():
-    from hw4.growth import label_changes
+    from hw4.evaluation.growth import label_changes
     # 4 cells, 3 classes (2 regions + free): cell 0 keeps region 0, cell 1 swaps 0 -> 1 with
     # both labels seen, cell 2 turns free, cell 3 unobserved then region 1
     a = np.array([[2, 0, 0], [1, 0, 0], [1, 0, 0], [0, 0, 0]], float)

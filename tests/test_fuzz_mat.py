@@ -15,7 +15,7 @@ from scipy.io import savemat
 
 from test_fuzz_settings import examples, refused_or
 
-from hw4.data import load_intel
+from hw4.core.data import load_intel
 from hw4.ogm_CSM import ogm_CSM
 from hw4.ogm_S_CSM import ogm_S_CSM
 from hw4.ogm_continuous_CSM import ogm_continuous_CSM

@@ -10,7 +10,7 @@ Profiles, chosen with the environment variable ``HYPOTHESIS_PROFILE``:
       HYPOTHESIS_PROFILE=long python -m pytest tests/test_fuzz_*.py
 
 The contract (:func:`refused_or`): every call either returns a result that the test then checks
-independently, or raises :class:`hw4.errors.InputError` with a one-line message. Any other
+independently, or raises :class:`hw4.core.errors.InputError` with a one-line message. Any other
 exception, any warning (pytest turns them into errors) or a NaN in a result fails the test.
 """
 from __future__ import annotations
@@ -19,7 +19,7 @@ import os
 
 from hypothesis import HealthCheck, settings
 
-from hw4.errors import InputError
+from hw4.core.errors import InputError
 
 _QUIET = [HealthCheck.too_slow, HealthCheck.function_scoped_fixture, HealthCheck.filter_too_much,
           HealthCheck.data_too_large, HealthCheck.large_base_example]

@@ -2,8 +2,8 @@
 import numpy as np
 import pytest
 
-from hw4.grid import Grid
-from hw4.sensor import BeamTable, wrap_to_pi
+from hw4.core.grid import Grid
+from hw4.core.sensor import BeamTable, wrap_to_pi
 
 
 def template_wrap(phase):

@@ -16,13 +16,14 @@ import numpy as np
 import pytest
 from scipy.io import savemat
 
-from hw4 import atomic, tasks
+from hw4.core import atomic
+from hw4 import tasks
 from hw4.__main__ import main
 from hw4.bki.config import load_config
 from hw4.bki.kitti import SemanticKITTISequence, read_calib
 from hw4.bki.pcd import read_labelled_scan, read_pcd
-from hw4.data import IntelData, ensure, ensure_all, load_intel
-from hw4.errors import InputError
+from hw4.core.data import IntelData, ensure, ensure_all, load_intel
+from hw4.core.errors import InputError
 from hw4.ogm_CSM import ogm_CSM
 from hw4.ogm_S_CSM import ogm_S_CSM
 from hw4.ogm_continuous_CSM import ogm_continuous_CSM
@@ -384,7 +385,7 @@ def test_unwritable_out_is_one_line(cmd, tmp_path, capsys, tiny_tasks):
 
 
 def test_data_into_an_unwritable_folder_is_one_line(tmp_path, capsys, monkeypatch):
-    from hw4 import data
+    from hw4.core import data
     with locked_folder(tmp_path / "locked") as locked:
         monkeypatch.setattr(data, "DATA_DIR", locked / "data")
         err = cli_err(capsys, ["data", "--only", "intel/"])

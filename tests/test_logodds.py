@@ -1,9 +1,9 @@
-"""The log-odds baseline: a literal loop of the course's occupancy-grid example vs hw4.logodds.
+"""The log-odds baseline: a literal loop of the course's occupancy-grid example vs hw4.evaluation.logodds.
 
 The loop below is written from the course's ``occupancy_grid_map.py`` (per cell: the 16 nearest
 poses, the perceptual field, the nearest beam by ``nanargmin`` of the wrapped bearing difference,
 the inverse sensor model with l_occ = 3, l_free = -3, l_0 = 0, and ``l += l_inv - l_0``), for
-clarity, not speed. hw4.logodds computes the map from the discrete CSM's counts instead; they must
+clarity, not speed. hw4.evaluation.logodds computes the map from the discrete CSM's counts instead; they must
 agree exactly, cell by cell.
 """
 from __future__ import annotations
@@ -12,9 +12,9 @@ import numpy as np
 import pytest
 from scipy.spatial import KDTree
 
-from hw4.data import IntelData, load_intel
-from hw4.grid import Grid
-from hw4.logodds import (L_FREE, L_OCC, LogOddsMap, build_logodds, logodds_from_counts,
+from hw4.core.data import IntelData, load_intel
+from hw4.core.grid import Grid
+from hw4.evaluation.logodds import (L_FREE, L_OCC, LogOddsMap, build_logodds, logodds_from_counts,
                          probability)
 
 
@@ -133,7 +133,7 @@ def test_clamp_clips_the_sum_and_rejects_non_positive():
 
 
 def test_tuning_picks_the_best_combination_and_never_sees_the_validation_scans():
-    from hw4.logodds import tune_logodds
+    from hw4.evaluation.logodds import tune_logodds
     d = load_intel(semantic=False)
     d = IntelData(d.poses[:40], d.scans[:40])
     seen = []

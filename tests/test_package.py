@@ -17,7 +17,7 @@ import numpy as np
 import pytest
 
 from hw4 import package
-from hw4.errors import InputError
+from hw4.core.errors import InputError
 
 from conftest import build_map, intel_raw
 
@@ -92,7 +92,7 @@ def test_package_runs_without_the_repository(tmp_path, fake_pdf):
         assert "from hw4." not in text and "import hw4\n" not in text and "from hw4 " not in text, path
         assert "from ." not in text or "hw4core" in path.parts, path  # faces import absolutely
 
-    from hw4.data import INTEL, INTEL_SEMANTIC, ensure
+    from hw4.core.data import INTEL, INTEL_SEMANTIC, ensure
     models = [(m, c, s) for m, (c, _, s) in MODELS.items()]
     script = folder / "drive.py"
     script.write_text(DRIVER.format(

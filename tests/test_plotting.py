@@ -1,4 +1,4 @@
-"""hw4.plotting: cells without evidence get their own colour in the variance map."""
+"""hw4.core.plotting: cells without evidence get their own colour in the variance map."""
 from __future__ import annotations
 
 from types import SimpleNamespace
@@ -9,8 +9,8 @@ import numpy as np
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
-from hw4 import plotting  # noqa: E402
-from hw4.grid import Grid  # noqa: E402
+from hw4.core import plotting  # noqa: E402
+from hw4.core.grid import Grid  # noqa: E402
 
 
 def _rendered(unobserved):

@@ -283,7 +283,7 @@ def test_hand_checked_scene(model, beams, copies, nearest_poses):
 # The sparse kernel
 # ------------------------------------------------------------------------------------------
 def test_kernel_end_values():
-    from hw4.kernel import sparse_kernel
+    from hw4.core.kernel import sparse_kernel
     assert sparse_kernel(0.0, sigma0=SIGMA0, l=L) == pytest.approx(SIGMA0, rel=1e-15)
     assert sparse_kernel(L, sigma0=SIGMA0, l=L) == 0.0
     assert np.all(sparse_kernel(np.array([L, 0.2000001, 0.5, 3.0]), sigma0=SIGMA0, l=L) == 0.0)
@@ -292,7 +292,7 @@ def test_kernel_end_values():
 
 
 def test_kernel_continuous_and_decreasing_on_0_l():
-    from hw4.kernel import sparse_kernel
+    from hw4.core.kernel import sparse_kernel
     d = np.linspace(0.0, L, 2001)
     k = sparse_kernel(d, sigma0=SIGMA0, l=L)
     assert np.all(np.diff(k) < 0), "not strictly decreasing on [0, l]"
@@ -307,14 +307,14 @@ def test_kernel_continuous_and_decreasing_on_0_l():
 def test_kernel_never_negative_near_l():
     """k >= 0 (it is a count of evidence), also just short of l, where the two terms of the
     bracket, (1 - u) and -(1 - u) to first order, cancel to O((1 - u)^5)."""
-    from hw4.kernel import sparse_kernel
+    from hw4.core.kernel import sparse_kernel
     d = np.concatenate([np.linspace(L - 1e-3, L, 100001), L - np.logspace(-16, -2, 1401)])
     k = sparse_kernel(d, sigma0=SIGMA0, l=L)
     assert np.all(k >= 0.0), f"k({d[k.argmin()]!r}) = {k.min()!r} < 0"
 
 
 def test_kernel_matches_the_handout_formula():
-    from hw4.kernel import sparse_kernel
+    from hw4.core.kernel import sparse_kernel
     d = np.linspace(0.0, 0.3, 301)
     np.testing.assert_allclose(sparse_kernel(d, sigma0=SIGMA0, l=L),
                                [kernel(x, SIGMA0, L) for x in d], rtol=0, atol=1e-15)

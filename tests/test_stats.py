@@ -1,10 +1,11 @@
-"""hw4.stats and hw4.illustrate on small hand-made maps whose answers are known exactly."""
+"""hw4.evaluation.stats and hw4.book.illustrate on small hand-made maps whose answers are known exactly."""
 import numpy as np
 import pytest
 
-from hw4 import illustrate, stats
-from hw4.grid import Grid
-from hw4.kernel import sparse_kernel
+from hw4.book import illustrate
+from hw4.evaluation import stats
+from hw4.core.grid import Grid
+from hw4.core.kernel import sparse_kernel
 
 
 def small_grid(g=0.5):
@@ -166,7 +167,7 @@ def test_summary_plain_numbers():
         assert type(v) in (int, float)
 
 
-# hw4.illustrate: the evidence one beam leaves along its line
+# hw4.book.illustrate: the evidence one beam leaves along its line
 
 
 def test_free_samples_strictly_short_of_end():

@@ -1,11 +1,11 @@
-"""hw4.studies: the options of the options study and their build times."""
+"""hw4.evaluation.studies: the options of the options study and their build times."""
 from __future__ import annotations
 
 import numpy as np
 import pytest
 
-from hw4 import studies
-from hw4.errors import InputError
+from hw4.evaluation import studies
+from hw4.core.errors import InputError
 
 
 def test_option_kw_gives_discrete_models_their_pose_options_only():
@@ -30,7 +30,7 @@ def test_tune_threshold_maximises_balanced_accuracy_on_the_validation_scans():
     """The chosen threshold gives the largest (occupied recall + free accuracy) / 2 of any
     threshold on the validation samples (rebuilt here from the same split), and the held-out
     test scans never enter."""
-    from hw4 import evaluate as ev
+    from hw4.evaluation import evaluate as ev
     from hw4.tasks import build_map
     split = ev.intel_split()
     t, row = studies.tune_threshold(task=1, grid_size=0.27, split=split, digits=12)

@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 from scipy.io import loadmat
 
-from hw4.data import INTEL, INTEL_SEMANTIC, ensure
+from hw4.core.data import INTEL, INTEL_SEMANTIC, ensure
 
 FACES = [("ogm_CSM", "ogm_CSM", False), ("ogm_continuous_CSM", "ogm_continuous_CSM", False),
          ("ogm_S_CSM", "ogm_S_CSM", True), ("ogm_continous_S_CSM", "ogm_continous_S_CSM", True),

@@ -11,8 +11,9 @@ from pathlib import Path
 
 import numpy as np
 
-from ..atomic import Outputs
-from ..errors import InputError
+from ..core.atomic import Outputs
+from ..core.errors import InputError
+from ..core.parser import OneLineParser
 from .config import DATASETS, check_map_memory, check_method, load_config
 from .voxelmap import METHODS
 
@@ -129,7 +130,7 @@ def _check_first_scan(loaders, cfg, method: str) -> None:
 
 
 def _map_and_write(args, cfg, loaders, out, o) -> int:
-    """Map the scans and write every output through ``o`` (:class:`hw4.atomic.Outputs`)."""
+    """Map the scans and write every output through ``o`` (:class:`hw4.core.atomic.Outputs`)."""
     import matplotlib.pyplot as plt
     from tqdm import tqdm
 
@@ -221,8 +222,7 @@ def _map_and_write(args, cfg, loaders, out, o) -> int:
 
 def main(argv=None) -> int:
     """Stand-alone entry point (``python -m hw4.bki``)."""
-    from ..__main__ import _Parser  # usage errors in one line, as python -m hw4 prints them
-    parser = _Parser(prog="python -m hw4.bki", description=DESCRIPTION, epilog=EPILOG,
+    parser = OneLineParser(prog="python -m hw4.bki", description=DESCRIPTION, epilog=EPILOG,
                      formatter_class=argparse.RawDescriptionHelpFormatter)
     add_arguments(parser)
     args = parser.parse_args(argv)

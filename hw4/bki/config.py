@@ -6,7 +6,7 @@ import tomllib
 from dataclasses import dataclass, fields, replace
 from pathlib import Path
 
-from ..errors import InputError
+from ..core.errors import InputError
 
 CONFIG_DIR = Path(__file__).resolve().parent / "configs"
 DATASETS = ("toy", "semantickitti")

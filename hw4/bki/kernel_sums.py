@@ -10,7 +10,7 @@ Conventions (as :mod:`hw4.bki.voxelmap`): voxel ``i = floor(x / r)`` per axis (w
 its centre at ``(i + 0.5) r``; the voxels a scan can reach lie in a box with origin ``lo`` (voxel
 indices) and shape ``dims``, raveled in C order (x slowest, z fastest). Distances are computed
 exactly as ``((p_x - c_x)^2 + (p_y - c_y)^2) + (p_z - c_z)^2`` with ``c = (i + o + 0.5) r``, and
-the kernel by the same table of polynomial pieces as :func:`hw4.kernel.sparse_kernel_pieces`, so
+the kernel by the same table of polynomial pieces as :func:`hw4.core.kernel.sparse_kernel_pieces`, so
 every pair's weight is the one that function gives; per voxel and class the weights are summed in
 the order of the points, offset by offset (x, then y, then z), one thread: the map is
 deterministic.
@@ -20,7 +20,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from ..kernel import _PIECES, _pieces
+from ..core.kernel import _PIECES, _pieces
 
 
 @njit(cache=True, nogil=True)

@@ -26,7 +26,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import InputError
+from ..core.errors import InputError
 from .scan import Scan
 
 CLASS_NAMES = ("free", "car", "bicycle", "motorcycle", "truck", "other-vehicle", "person",

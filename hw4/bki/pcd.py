@@ -5,7 +5,7 @@ although the header declares four fields; current PCL skips such lines and retur
 This reader keeps the declared columns and ignores trailing extras. Anything truly malformed (a
 missing, repeated or inconsistent header entry, a field name used twice, too few values on a
 line, too few or too many lines or bytes for ``POINTS``, a value that is not a number of the
-declared type) raises :class:`~hw4.errors.InputError` with one sentence; it never returns a
+declared type) raises :class:`~hw4.core.errors.InputError` with one sentence; it never returns a
 silently empty, shortened or truncated cloud. Fields named ``_`` are PCL's padding: skipped.
 
 ``binary_compressed`` (LZF) files are rejected with a clear message: convert them with
@@ -18,7 +18,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import InputError
+from ..core.errors import InputError
 from .scan import Scan
 
 _TYPES = {("F", 4): "<f4", ("F", 8): "<f8", ("U", 1): "<u1", ("U", 2): "<u2", ("U", 4): "<u4",

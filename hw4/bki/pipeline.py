@@ -13,7 +13,7 @@ from typing import Iterator
 
 import numpy as np
 
-from ..errors import InputError
+from ..core.errors import InputError
 from .config import BKIConfig
 from .kitti import SemanticKITTISequence
 from .pcd import read_labelled_scan
@@ -29,10 +29,10 @@ def _natural(p: Path):
 def toy_paths(folder=None) -> list[Path]:
     """The labelled PCD scans of a folder in natural order (``..._2.pcd`` before ``..._10.pcd``).
 
-    Without ``folder``, the 12 toy scans made present and verified by :mod:`hw4.data`.
+    Without ``folder``, the 12 toy scans made present and verified by :mod:`hw4.core.data`.
     """
     if folder is None:
-        from ..data import ensure_all
+        from ..core.data import ensure_all
         return sorted(ensure_all("bki_toy/"), key=_natural)
     folder = Path(folder)
     if folder.is_file():
@@ -64,12 +64,12 @@ class Loaders(list):
 
 
 KITTI_04 = "semantickitti_04/sequences/04/"
-"""The verified copy of SemanticKITTI sequence 04 (scans 0-9) in :mod:`hw4.data`."""
+"""The verified copy of SemanticKITTI sequence 04 (scans 0-9) in :mod:`hw4.core.data`."""
 
 
 def kitti_04_folder() -> Path:
     """The sequence 04 folder in ``data/``, made present and verified first."""
-    from ..data import DATA_DIR, ensure_all
+    from ..core.data import DATA_DIR, ensure_all
     ensure_all(KITTI_04)
     return DATA_DIR / KITTI_04
 
@@ -83,7 +83,7 @@ def scan_source(dataset: str, path=None, cfg: BKIConfig | None = None,
     dataset : {"toy", "semantickitti"}
     path : str or Path, optional
         Folder of PCD scans (toy) or a SemanticKITTI sequence folder; by default the verified toy
-        scans or the 10 verified scans of SemanticKITTI sequence 04 of :mod:`hw4.data`.
+        scans or the 10 verified scans of SemanticKITTI sequence 04 of :mod:`hw4.core.data`.
     cfg : BKIConfig, optional
         Supplies the SemanticKITTI label folder.
     calib : str or Path, optional

@@ -31,8 +31,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..errors import InputError
-from ..kernel import sparse_kernel_pieces
+from ..core.errors import InputError
+from ..core.kernel import sparse_kernel_pieces
 from .voxelmap import MapView, VoxelMap, kernel_reach, posterior_view
 
 FRAMES = ("velodyne", "reference")

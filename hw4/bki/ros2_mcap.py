@@ -193,7 +193,7 @@ class MapRecorder:
     Use as a context manager; :meth:`add` after each scan. With ``atomic`` (the default) the file
     is written under a temporary name and renamed to ``path`` only when the recorder closes without
     an error; on any error nothing is left. ``atomic=False`` writes ``path`` directly, for callers
-    that already write to a temporary name (:class:`hw4.atomic.Outputs`).
+    that already write to a temporary name (:class:`hw4.core.atomic.Outputs`).
 
     Parameters
     ----------

@@ -10,7 +10,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..errors import InputError
+from ..core.errors import InputError
 
 
 @dataclass
@@ -39,7 +39,7 @@ class Scan:
 def validate_scan(scan: Scan, num_class: int) -> Scan:
     """Check a scan for mapping; return it with canonical dtypes.
 
-    Raises :class:`~hw4.errors.InputError` (one sentence) when the scan has no points, a point,
+    Raises :class:`~hw4.core.errors.InputError` (one sentence) when the scan has no points, a point,
     label or origin is not finite, or a label lies outside ``1 .. num_class - 1``.
 
     Parameters

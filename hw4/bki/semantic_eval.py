@@ -22,7 +22,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..errors import InputError
+from ..core.errors import InputError
 from .kitti import learning_labels, read_bin, read_label
 from .scan import Scan, validate_scan
 from .training import training_data

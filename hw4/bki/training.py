@@ -20,7 +20,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..errors import InputError
+from ..core.errors import InputError
 from .scan import Scan
 
 _OFF = np.int64(1 << 20)  # leaf index offset: keys are valid for |x| < 2^20 ds_resolution

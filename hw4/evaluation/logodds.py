@@ -20,7 +20,7 @@ a linear function of the CSM's evidence,
 .. math::  l_i = \\operatorname{clip}\\big(l_0 + n^{hit}_i\\,(l_{occ} - l_0)
             + n^{pass}_i\\,(l_{free} - l_0),\\ -c,\\ c\\big),
 
-(the clamp ``c`` applied to the sum; ``c = inf`` is no clamp) and :func:`build_logodds` computes it from :func:`hw4.evidence.count_evidence` rather than
+(the clamp ``c`` applied to the sum; ``c = inf`` is no clamp) and :func:`build_logodds` computes it from :func:`hw4.core.evidence.count_evidence` rather than
 repeating the geometry (``tests/test_logodds.py`` checks this against a literal loop).
 
 What the counting model keeps and the log-odds grid throws away: the log-odds is one number per
@@ -31,11 +31,11 @@ from __future__ import annotations
 
 import numpy as np
 
-from . import data as _data
-from .errors import InputError
-from .evidence import count_evidence
-from .grid import Grid
-from .sensor import N_BEAMS, Z_MAX
+from ..core import data as _data
+from ..core.errors import InputError
+from ..core.evidence import count_evidence
+from ..core.grid import Grid
+from ..core.sensor import N_BEAMS, Z_MAX
 
 L_OCC = 3.0    # log-odds of an occupied reading (course example)
 L_FREE = -3.0  # log-odds of a free reading (course example)
@@ -82,7 +82,7 @@ class LogOddsMap:
     counts : (n_cells, 2) float, the hits and pass-throughs behind it (kept for bookkeeping: the
         log-odds alone cannot tell an unobserved cell from one with as many hits as passes)
     map : dict with ``'logodd'`` and ``'prob'`` (n_cells, 1) as in the course example, and
-        ``'mean'`` (= ``'prob'``) so that :func:`hw4.plotting.plot_mean` draws it
+        ``'mean'`` (= ``'prob'``) so that :func:`hw4.core.plotting.plot_mean` draws it
     observed : (n_cells,) bool, any hit or pass-through
     """
 
@@ -125,7 +125,7 @@ def build_logodds(grid_size: float, data: _data.IntelData | None = None, *,
         Poses per cell (course example: 16 nearest); None for every pose within ``z_max``.
     z_max : float [m]; n_beams : int (beta = 2 pi / n_beams)
     **grid_kw
-        ``range_x``, ``range_y`` of :class:`hw4.grid.Grid`.
+        ``range_x``, ``range_y`` of :class:`hw4.core.grid.Grid`.
     """
     import time
     if data is None:
@@ -160,7 +160,7 @@ def tune_logodds(grid_size: float, data: _data.IntelData, score, every: int = 10
     scan in ``every`` of them (those with index ``offset`` mod ``every``) is set aside for
     validation; the evidence is counted once from the rest, and every combination of the grids
     is scored on the validation scans by ``score(map, validation_data)``, which returns a number
-    to maximise (the notebooks pass the held-out AUC of :mod:`hw4.evaluate`). Ties keep the
+    to maximise (the notebooks pass the held-out AUC of :mod:`hw4.evaluation.evaluate`). Ties keep the
     first combination in grid order.
 
     Returns

@@ -14,10 +14,10 @@ from types import SimpleNamespace
 import numpy as np
 import matplotlib.pyplot as plt
 
-from .errors import InputError
-from .evidence import count_evidence
-from .grid import Grid
-from . import plotting
+from ..core.errors import InputError
+from ..core.evidence import count_evidence
+from ..core.grid import Grid
+from ..core import plotting
 
 EVERY = 25  # scans per animation frame
 PATH_COLOR = "black"  # the robot's path: apart from every class colour (crimson was close to hallways' pink)
@@ -35,7 +35,7 @@ def incremental_counts(data, every: int = EVERY, grid_size: float = 0.135, seman
         Scans per step; the last step may be shorter (743 = 29 x 25 + 18).
     grid_size : float [m]
     semantic, model, beams, **kw
-        Passed to :func:`hw4.evidence.count_evidence`; default the continuous semantic CSM with
+        Passed to :func:`hw4.core.evidence.count_evidence`; default the continuous semantic CSM with
         every beam (the full kernel sums of Eq. 9).
     nearest_poses : None
         Must be None (every pose within range), see the module docstring.
@@ -64,7 +64,7 @@ def incremental_counts(data, every: int = EVERY, grid_size: float = 0.135, seman
 
 
 def _semantic_view(grid, counts, prior=1e-3):
-    """What :func:`hw4.plotting.semantic_rgb` needs, from semantic counts (free last)."""
+    """What :func:`hw4.core.plotting.semantic_rgb` needs, from semantic counts (free last)."""
     return SimpleNamespace(grid=grid, map={"alpha": prior + counts}, num_classes=counts.shape[1] - 1,
                            observed=counts.sum(axis=1) > 0)
 

@@ -15,7 +15,7 @@ the block ends normally the temporary files are renamed into place (``os.replace
 appears whole); when it ends with any exception, ``KeyboardInterrupt`` included, the temporary
 files are removed, folders made for the run are removed again when empty, and no file the user
 had is touched. A write error (full disk, quota, read-only file system, permission) becomes one
-:class:`~hw4.errors.InputError` sentence.
+:class:`~hw4.core.errors.InputError` sentence.
 """
 from __future__ import annotations
 

@@ -1,7 +1,7 @@
 """Parameter studies on held-out data: kernel length scale and scale, and template vs fuller options.
 
-The studies build maps from the mapping scans of :func:`hw4.evaluate.intel_split` and score them
-with :func:`hw4.evaluate.score_map`, so their numbers are comparable with the evaluation table.
+The studies build maps from the mapping scans of :func:`hw4.evaluation.evaluate.intel_split` and score them
+with :func:`hw4.evaluation.evaluate.score_map`, so their numbers are comparable with the evaluation table.
 Build times for the book come from :func:`options_seconds`, timed as the book's other build times
 (:func:`hw4.book.best_seconds`: shortest of a few builds of the task's whole Intel file).
 """
@@ -12,12 +12,12 @@ from types import SimpleNamespace
 import numpy as np
 
 from . import evaluate as ev
-from .errors import InputError
-from .evidence import count_evidence
-from .grid import Grid
-from .kernel import SIGMA0
-from .posterior import beta_mean_variance, dirichlet_mean_variance
-from .template import PRIOR
+from ..core.errors import InputError
+from ..core.evidence import count_evidence
+from ..core.grid import Grid
+from ..core.kernel import SIGMA0
+from ..core.posterior import beta_mean_variance, dirichlet_mean_variance
+from ..template import PRIOR
 
 LENGTHS = (0.1, 0.2, 0.3, 0.5)  # kernel length scales l of the study [m]
 SIGMAS = (0.01, 0.1, 1.0)       # kernel scales sigma_0 of the study
@@ -61,7 +61,7 @@ def kernel_study(lengths=LENGTHS, sigmas=SIGMAS, grid_size: float = 0.135, tasks
     Returns
     -------
     list of dict: ``task``, ``model``, ``l`` [m], ``sigma``, the scores of
-    :func:`hw4.evaluate.score_map` (without ROC curves) and ``median_variance`` (median posterior
+    :func:`hw4.evaluation.evaluate.score_map` (without ROC curves) and ``median_variance`` (median posterior
     variance over observed cells).
     """
     split = split or ev.intel_split()
@@ -114,7 +114,7 @@ def options_seconds(grid_size: float = 0.27, tasks=(1, 2, 4), options=OPTIONS,
     -------
     dict ``(task, nearest_poses, beams) -> seconds``, the keys of :func:`options_study`'s rows.
     """
-    from .book import best_seconds
+    from ..book import best_seconds
     if repeats < 1:
         raise InputError(f"repeats must be at least 1; got {repeats!r}.")
     secs: dict = {}
@@ -143,7 +143,7 @@ def options_study(grid_size: float = 0.27, tasks=(1, 2, 4), options=OPTIONS,
     ``free_evidence``, ``occupied_kept``, ``free_kept`` (share of the fullest option's evidence),
     ``build_seconds`` (one build of this map from the mapping scans, the counting only, as
     :func:`hw4.tasks.build_map` times it; the book quotes :func:`options_seconds` instead) and the
-    scores of :func:`hw4.evaluate.score_map` (without ROC curves).
+    scores of :func:`hw4.evaluation.evaluate.score_map` (without ROC curves).
     Pass a dict as ``maps`` to receive the built maps keyed by ``(task, nearest_poses, beams)``.
     """
     split = split or ev.intel_split()
@@ -187,14 +187,14 @@ def margin_study(maps: dict, margins=MARGINS, split: ev.Split | None = None) -> 
 
     Parameters
     ----------
-    maps : dict ``(task, grid_size) -> built map``, e.g. from :func:`hw4.evaluate.evaluate_all`'s
+    maps : dict ``(task, grid_size) -> built map``, e.g. from :func:`hw4.evaluation.evaluate.evaluate_all`'s
         ``maps`` argument.
     margins : sequence of float [m]
 
     Returns
     -------
     list of dict: ``task``, ``model``, ``grid_size``, ``margin`` and the scores of
-    :func:`hw4.evaluate.score_map` (without ROC curves).
+    :func:`hw4.evaluation.evaluate.score_map` (without ROC curves).
     """
     split = split or ev.intel_split()
     rows = []
@@ -230,8 +230,8 @@ def free_sample_study(grid_size: float = 0.135, task: int = 4, variants=FREE_VAR
     Returns
     -------
     (rows, maps, boot): one row per variant (``key``, ``label``, ``task``, ``grid_size`` and the
-    scores of :func:`hw4.evaluate.score_map`, without ROC curves); the maps keyed by variant;
-    and, when ``n_boot > 0``, :func:`hw4.evaluate.bootstrap_scores` of the maps in variant
+    scores of :func:`hw4.evaluation.evaluate.score_map`, without ROC curves); the maps keyed by variant;
+    and, when ``n_boot > 0``, :func:`hw4.evaluation.evaluate.bootstrap_scores` of the maps in variant
     order (else None).
     """
     split = split or ev.intel_split()
@@ -290,12 +290,12 @@ def tune_free_weight(grid_size: float = 0.135, factors=FREE_WEIGHTS,
                      metric: str = "miou_all") -> tuple:
     """Choose the free-evidence factor of the continuous S-CSM on validation scans, not test scans.
 
-    As :func:`hw4.evaluate.tuned_logodds` does for the log-odds baseline: from the *mapping*
+    As :func:`hw4.evaluation.evaluate.tuned_logodds` does for the log-odds baseline: from the *mapping*
     scans of ``split`` (the held-out test scans are never seen here) one scan in ``every`` (index
     ``offset`` mod ``every``) is set aside for validation; the evidence is counted once from the
     rest (the package's free samples), its free column multiplied by each factor, and each map
     scored on the validation scans' samples (same step and margin as the split) by ``metric``:
-    a score of :func:`hw4.evaluate.score_map`, or ``miou_all`` (default), the mean IoU over the
+    a score of :func:`hw4.evaluation.evaluate.score_map`, or ``miou_all`` (default), the mean IoU over the
     six regions *and* free space from the whole confusion matrix, so that free points called a
     region count against it (the end-point ``miou`` alone only rises as the free weight goes to
     zero). Ties keep the first factor in ``factors``.
@@ -328,7 +328,7 @@ def tune_threshold(task: int = 4, grid_size: float = 0.135, split: ev.Split | No
     As :func:`tune_free_weight`: one scan in ``every`` of the *mapping* scans of ``split`` is set
     aside (the held-out test scans are never seen), the map of ``task`` is built from the rest
     (``kw``: its options, e.g. ``beams="all", nearest_poses=None``), and the threshold ``t`` on
-    :func:`hw4.evaluate.occupancy_score` (1 - P(free) for a semantic map) that maximises the
+    :func:`hw4.evaluation.evaluate.occupancy_score` (1 - P(free) for a semantic map) that maximises the
     balanced accuracy on the validation samples, (occupied recall + free accuracy) / 2, is taken
     half-way between two distinct scores and rounded to ``digits`` decimals (the number the text
     prints; the map is read as occupied where its score is > ``t``).
@@ -336,9 +336,9 @@ def tune_threshold(task: int = 4, grid_size: float = 0.135, split: ev.Split | No
     Returns
     -------
     (t, row): the threshold [probability] and the validation scores at ``t``
-    (:func:`hw4.evaluate.threshold_scores` plus ``n_val``, ``balanced``).
+    (:func:`hw4.evaluation.evaluate.threshold_scores` plus ``n_val``, ``balanced``).
     """
-    from .tasks import build_map
+    from ..tasks import build_map
     fit, samples, n_val = validation_split(task, split, every, offset)
     m = build_map(task, grid_size, data=fit, **kw)
     cell, scored = ev.scored_cells(m, samples)

@@ -14,14 +14,14 @@ from __future__ import annotations
 
 import numpy as np
 
-from .evidence import SAMPLE_STEP, n_samples
-from .kernel import LENGTH, SIGMA0, sparse_kernel
+from ..core.evidence import SAMPLE_STEP, n_samples
+from ..core.kernel import LENGTH, SIGMA0, sparse_kernel
 
 
 def free_samples(z: float, step: float = SAMPLE_STEP, end_sample: bool = False) -> np.ndarray:
     """Distances [m] of the free samples along a beam of range ``z`` [m].
 
-    ``s = 0, step, 2 step, ...`` strictly short of ``z``, exactly as :mod:`hw4.evidence` places
+    ``s = 0, step, 2 step, ...`` strictly short of ``z``, exactly as :mod:`hw4.core.evidence` places
     them; with ``end_sample`` one more sample at ``s = z`` itself.
     """
     n = int(n_samples(np.asarray([float(z)]), step)[0])

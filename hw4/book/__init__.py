@@ -1,6 +1,6 @@
 """Helpers the book's chapters share: gluing numbers, timing builds, table writers, zoom windows.
 
-Nothing here computes a map or a score (that is :mod:`hw4.evaluate`, :mod:`hw4.stats` and the
+Nothing here computes a map or a score (that is :mod:`hw4.evaluation.evaluate`, :mod:`hw4.evaluation.stats` and the
 models); this module only carries results into the book's prose and tables:
 
 * :func:`put` glues one number under a name for ``{glue:text}`` (myst-nb), rounded to 10
@@ -8,7 +8,7 @@ models); this module only carries results into the book's prose and tables:
 * :func:`best_seconds` times a few builds of one map and keeps the shortest (timings on a shared
   machine are noisy; only cells that nbval does not compare may call it);
 * :func:`glue_rows`, :func:`myst_table`, :func:`markdown_table` turn the rows of
-  :func:`hw4.evaluate.evaluate_all` into glued numbers and tables;
+  :func:`hw4.evaluation.evaluate.evaluate_all` into glued numbers and tables;
 * :func:`zoom` sets an axis onto a named window of the building [m, world frame].
 """
 from __future__ import annotations
@@ -28,14 +28,14 @@ PRINT_WIDTH = 7.0   # [in] width of a full-width figure; the PDF scales it to th
 
 
 def style():
-    """The book's plot style: :func:`hw4.plotting.style` plus sizes for print.
+    """The book's plot style: :func:`hw4.core.plotting.style` plus sizes for print.
 
     Figures are drawn at most :data:`PRINT_WIDTH` wide with 9 pt text, so that the PDF, which
     scales them to the text width, prints no text below 8 pt; 200 dpi so that one-cell walls of
     a full-building map stay visible.
     """
     import matplotlib as mpl
-    from . import plotting
+    from ..core import plotting
     plotting.style()
     mpl.rcParams.update({
         "figure.dpi": 200, "savefig.dpi": 200, "font.size": 9, "axes.titlesize": 9.5,
@@ -106,7 +106,7 @@ def put_interval(name: str, estimate, interval, glue=None, signed_digits: int | 
 
 def best_seconds(task: int, grid_size: float, repeats: int = 3, **kw) -> float:
     """Shortest build time [s] of ``repeats`` builds of one task's map (see :func:`hw4.tasks.build_map`)."""
-    from .tasks import build_map
+    from ..tasks import build_map
     return min(build_map(task, grid_size=grid_size, **kw).build_seconds for _ in range(repeats))
 
 
@@ -213,7 +213,7 @@ def markdown_table(rows, columns=DEFAULT_COLUMNS, digits: int = 3) -> str:
 
 def class_legend_below(fig, num_classes: int = 6, ncol: int = 4):
     """One legend for a figure of semantic maps, below its panels: the regions, free, unknown."""
-    from . import plotting
+    from ..core import plotting
     return fig.legend(handles=plotting.class_handles(num_classes), loc="outside lower center",
                       ncol=ncol, frameon=False)
 
@@ -223,8 +223,8 @@ def class_and_variance(m, axes, label: str, vmax: float = 0.25, window: str | No
     """Class map (``axes[0]``) and variance of the most likely class (``axes[1]``) of a semantic
     map, zoomed onto ``window`` when given; returns the variance image (for a colour bar).
     ``unobserved``: colour of the cells without evidence in the variance panel
-    (:func:`hw4.plotting.plot_variance`)."""
-    from . import plotting
+    (:func:`hw4.core.plotting.plot_variance`)."""
+    from ..core import plotting
     plotting.plot_semantic(m, ax=axes[0], title=f"class, {label}", legend=False)
     im = plotting.plot_variance(m, ax=axes[1], title=f"variance, {label}", vmax=vmax,
                                 colorbar=False, log=log, vmin=vmin, unobserved=unobserved)

@@ -8,7 +8,7 @@ The registry is ``data/manifest.tsv`` (path relative to ``data/``, SHA-256, upst
 3. downloading it from its upstream URL (verified).
 
 A checksum mismatch never overwrites a file the user has: the bad download is kept
-aside as ``<name>.partial`` and an :class:`~hw4.errors.InputError` says what to do.
+aside as ``<name>.partial`` and an :class:`~hw4.core.errors.InputError` says what to do.
 
 :func:`load_intel` returns plain arrays (poses and scans) and validates the structure.
 """
@@ -28,7 +28,7 @@ import numpy as np
 
 from .errors import InputError
 
-PROJECT_ROOT = Path(__file__).resolve().parent.parent
+PROJECT_ROOT = Path(__file__).resolve().parents[2]
 DATA_DIR = Path(os.environ.get("HW4_DATA_DIR") or PROJECT_ROOT / "data")
 SHARED_DIR = Path(os.environ.get("HW4_SHARED_DATA") or PROJECT_ROOT.parent / "shared" / "data")
 

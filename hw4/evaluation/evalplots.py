@@ -1,6 +1,6 @@
 """Figures of the held-out evaluation: ROC curves, confusion matrix, study curves.
 
-Same look as :mod:`hw4.plotting` (call :func:`hw4.plotting.style` first): one colour per model,
+Same look as :mod:`hw4.core.plotting` (call :func:`hw4.core.plotting.style` first): one colour per model,
 one line style per grid size, the semantic classes named as in the map legends.
 """
 from __future__ import annotations
@@ -8,7 +8,7 @@ from __future__ import annotations
 import numpy as np
 import matplotlib.pyplot as plt
 
-from .plotting import CLASS_NAMES
+from ..core.plotting import CLASS_NAMES
 
 MODEL_COLORS = {0: "0.45", 1: "#0072BD", 2: "#D95319", 3: "#7E2F8E", 4: "#77AC30"}
 GRID_STYLES = {0.135: "-", 0.27: "--", 0.5: ":"}
@@ -26,7 +26,7 @@ def plot_roc(rows, ax=None, title=None, legend=True, zoom: float | None = None,
 
     Parameters
     ----------
-    rows : list of dict from :func:`hw4.evaluate.evaluate_all` (``keep_roc=True``).
+    rows : list of dict from :func:`hw4.evaluation.evaluate.evaluate_all` (``keep_roc=True``).
     ax : Axes, optional
     zoom : float, optional
         Show only false positive rates up to ``zoom`` (the region where good maps differ).

@@ -148,7 +148,7 @@ def plot_map(ogm, ax=None, title=None, **kw):
 def plot_dataset(data, ax=None, every=3, title=None, path_color="crimson"):
     """Robot trajectory and scan end points in the world frame, coloured by label when present.
 
-    data : :class:`hw4.data.IntelData`; every : plot every n-th scan (keeps the figure light);
+    data : :class:`hw4.core.data.IntelData`; every : plot every n-th scan (keeps the figure light);
     path_color : matplotlib colour of the trajectory (a dark grey sets it apart from the class
     colours of a semantic data set).
     """

@@ -1,7 +1,7 @@
 """Map statistics the book quotes: coverage, uncertainty, labels, and changes between maps.
 
 Every function takes a built map as :func:`hw4.tasks.build_map` returns it (or any object with
-the same attributes: ``grid`` (:class:`hw4.grid.Grid`), ``map['mean']``, ``map['variance']``,
+the same attributes: ``grid`` (:class:`hw4.core.grid.Grid`), ``map['mean']``, ``map['variance']``,
 ``map['alpha']``, ``counts`` (evidence without the prior, free space in the last column) and
 ``semantic``). :func:`from_counts` makes such an object from plain arrays, for tests and for
 small hand-made examples.
@@ -19,8 +19,8 @@ from types import SimpleNamespace
 
 import numpy as np
 
-from .grid import Grid
-from .posterior import beta_mean_variance, dirichlet_mean_variance
+from ..core.grid import Grid
+from ..core.posterior import beta_mean_variance, dirichlet_mean_variance
 
 UNKNOWN = -1  # label of a cell without evidence
 

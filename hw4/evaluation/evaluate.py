@@ -14,12 +14,12 @@ measure it on held-out data; this module does the same for the Intel sample:
    gets a sample) and ``margin = 0.25 m`` (half the coarsest cell of the study, so that at every
    grid size a free sample lies at least half a cell before the surface it is contrasted with)
    do not depend on the map: every map, at every grid size, is scored on the *same* points.
-3. A sample is scored in the cell whose centre is nearest to it (:meth:`hw4.grid.Grid.nearest_cell`).
+3. A sample is scored in the cell whose centre is nearest to it (:meth:`hw4.core.grid.Grid.nearest_cell`).
    Samples in cells without evidence (or outside the map) are **not** scored: the prior's 0.5 is
    no prediction. Their share is reported separately (``unobserved``; ``coverage`` is the rest).
 4. Occupancy is scored by the ROC curve and its area (AUC) of the predicted probability of
    occupancy: the Beta mean for the binary maps, ``1 - mean[free]`` for the semantic maps, the
-   log-odds for the classical baseline (:mod:`hw4.logodds`). Semantic maps are also scored by the
+   log-odds for the classical baseline (:mod:`hw4.evaluation.logodds`). Semantic maps are also scored by the
    accuracy and per-class IoU of the most likely class at the held-out end points, the share of
    free samples predicted free, and a confusion matrix.
 
@@ -34,9 +34,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from . import data as _data
-from .errors import InputError
-from .posterior import most_likely_class
+from ..core import data as _data
+from ..core.errors import InputError
+from ..core.posterior import most_likely_class
 
 GRID_SIZES = (0.135, 0.27, 0.5)  # the homework's resolution study [m]
 HOLD_OUT_EVERY = 10              # default split: every 10th scan is held out
@@ -77,7 +77,7 @@ def split_scans(n_scans: int, every: int = HOLD_OUT_EVERY, offset: int | None = 
 
 
 def subset(data: _data.IntelData, idx) -> _data.IntelData:
-    """The poses and scans with indices ``idx`` as a new :class:`~hw4.data.IntelData`."""
+    """The poses and scans with indices ``idx`` as a new :class:`~hw4.core.data.IntelData`."""
     idx = np.asarray(idx, dtype=np.int64)
     return _data.IntelData(np.asarray(data.poses)[idx], [data.scans[i] for i in idx])
 
@@ -282,7 +282,7 @@ def occupancy_score(m) -> np.ndarray:
     """(n_cells,) score of occupancy of a map, higher = more likely occupied.
 
     Binary maps: the Beta mean. Semantic maps: 1 - mean of free space. Log-odds maps
-    (:class:`hw4.logodds.LogOddsMap`): the log-odds itself (same order as the probability, but
+    (:class:`hw4.evaluation.logodds.LogOddsMap`): the log-odds itself (same order as the probability, but
     without the ties that saturating ``1 / (1 + exp(-l))`` to exactly 0 or 1 would create).
     """
     if getattr(m, "logodds", None) is not None:
@@ -308,7 +308,7 @@ def score_map(m, samples: HeldOut, keep_roc: bool = True) -> dict:
     Parameters
     ----------
     m : a built map with ``.grid``, ``.observed`` (n_cells,) bool, ``.map['mean']`` (and
-        ``.map['alpha']``, ``.semantic`` for semantic maps), or a :class:`hw4.logodds.LogOddsMap`.
+        ``.map['alpha']``, ``.semantic`` for semantic maps), or a :class:`hw4.evaluation.logodds.LogOddsMap`.
     samples : HeldOut
 
     Returns
@@ -561,7 +561,7 @@ def intel_split(every: int = HOLD_OUT_EVERY, offset: int | None = None, step: fl
     The binary and semantic Intel files hold the same poses and beam end points (the semantic one
     adds the label row), so one sample set, taken from the semantic file, scores every model.
     """
-    from .tasks import load_task_data
+    from ..tasks import load_task_data
     key = (every, offset, step, margin)
     if key not in _split_cache:
         sem = load_task_data(3)
@@ -572,7 +572,7 @@ def intel_split(every: int = HOLD_OUT_EVERY, offset: int | None = None, step: fl
 
 def mapping_data(task: int, split: Split) -> _data.IntelData:
     """The mapping scans of the data task ``task`` uses (semantic copy for tasks 3, 4)."""
-    from .tasks import load_task_data
+    from ..tasks import load_task_data
     return subset(load_task_data(task), split.mapping)
 
 
@@ -582,10 +582,10 @@ _tuned_cache: dict = {}
 def tuned_logodds(grid_size: float, split: Split | None = None, **kw) -> tuple:
     """The log-odds baseline's increments and clamp, tuned on validation scans of the mapping set.
 
-    :func:`hw4.logodds.tune_logodds` on the mapping scans of ``split`` (one in ten of them set
+    :func:`hw4.evaluation.logodds.tune_logodds` on the mapping scans of ``split`` (one in ten of them set
     aside for validation; the held-out test scans are never used), maximising the AUC of
     :func:`score_map` on the validation scans' samples (same step and margin as the split).
-    Cached per process. Returns ``(best, rows)`` as :func:`~hw4.logodds.tune_logodds` does.
+    Cached per process. Returns ``(best, rows)`` as :func:`~hw4.evaluation.logodds.tune_logodds` does.
     """
     from .logodds import tune_logodds
     split = split or intel_split()
@@ -612,7 +612,7 @@ def build_eval_map(task: int, grid_size: float, split: Split | None = None, tune
     The baseline uses the increments and clamp of :func:`tuned_logodds` unless ``tuned=False``
     (then the course example's 3, -3 and no clamp, or those given in ``kw``).
     """
-    from .tasks import build_map
+    from ..tasks import build_map
     split = split or intel_split()
     if task == 0:
         from .logodds import build_logodds
@@ -634,7 +634,7 @@ def evaluate_all(grid_sizes=GRID_SIZES, tasks=(1, 2, 3, 4), baseline: bool = Tru
     tasks : sequence of int
         Homework tasks 1..4 (CSM, continuous CSM, S-CSM, continuous S-CSM).
     baseline : bool
-        Add the classical log-odds grid (:mod:`hw4.logodds`) at every grid size, as ``task`` 0.
+        Add the classical log-odds grid (:mod:`hw4.evaluation.logodds`) at every grid size, as ``task`` 0.
     split : Split, optional
         Mapping / held-out split and samples (default :func:`intel_split`: every 10th scan held
         out, free samples every 0.1 m up to 0.25 m before the end point).

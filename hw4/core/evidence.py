@@ -2,7 +2,7 @@
 
 One function, :func:`count_evidence`, computes the pseudo-counts that Algorithms 1 and 2 of the
 homework (and their semantic versions, Eqs. 8 and 9) add to every cell, as a plain
-``(n_cells, K)`` array; priors and posteriors live in :mod:`hw4.posterior`.
+``(n_cells, K)`` array; priors and posteriors live in :mod:`hw4.core.posterior`.
 
 Columns: binary models ``K = 2`` (column 0 occupied = alpha, column 1 free = beta);
 semantic models ``K = num_labels + 1`` (column ``c - 1`` for label ``c``, free space last).
@@ -12,7 +12,7 @@ How the loops of the template become array code
 The template loops over cells, over the 16 poses nearest to each cell, and (inside
 ``nanargmin``) over beams. Here the (cell, pose) pairs of a block of cells are built at once
 (KD-tree query), the pairs outside the perceptual field are dropped, and the nearest beam of
-every pair comes from a per-pose sorted bearing index (:class:`hw4.sensor.BeamTable`). The
+every pair comes from a per-pose sorted bearing index (:class:`hw4.core.sensor.BeamTable`). The
 continuous model then evaluates, per pair, only the free samples that can lie within ``l`` of
 the cell (at most ``2 l / step + 2`` of them), computed with the same floating-point steps as
 the loop. Counts are summed with ``np.bincount``. With ``beams='all'`` the loop runs over poses
