@@ -405,3 +405,106 @@ def test_table_difference_is_that_of_the_printed_scores_and_threshold_scores_rea
     assert t["occupied_recall"] == pytest.approx(r["occupied_recall"])
     assert t["free_accuracy"] == pytest.approx(r["free_accuracy"])
     assert ev.threshold_scores(a, s, -1.0)["occupied_recall"] == 1.0
+
+
+# ---------------------------------------------------------------- bootstrap: per-scan sums, BCa
+def _random_case(seed, n=90, n_scans=7):
+    """A semantic and a binary toy map with partly unobserved cells, and samples from a few scans."""
+    rng = np.random.default_rng(seed)
+    alpha = rng.uniform(0.1, 3.0, (6, 7))
+    observed = [1, 1, 1, 1, 0, 1]
+    sem = _toy_map(observed, np.zeros(6), semantic_alpha=alpha)
+    sem.observed = np.asarray(observed, bool)
+    binary = _toy_map([1, 1, 0, 1, 1, 1], rng.choice([0.2, 0.5, 0.7, 0.9], 6))  # ties
+    pts = rng.uniform(-0.4, 2.4, (n, 2)) * [1, 0.5]
+    occ = rng.uniform(size=n) < 0.4
+    label = np.where(occ, rng.integers(1, 7, n), 0)
+    return sem, binary, ev.HeldOut(pts, occ, label, rng.integers(0, n_scans, n) * 10)
+
+
+def _repeated(samples, scans, weights):
+    """The samples with every sample of scan ``scans[i]`` repeated ``weights[i]`` times."""
+    times = np.zeros(len(samples.scan), np.int64)
+    for sc, w in zip(scans, weights):
+        times[samples.scan == sc] = w
+    keep = np.repeat(np.arange(len(times)), times)
+    return ev.HeldOut(samples.points[keep], samples.occupied[keep], samples.label[keep],
+                      samples.scan[keep])
+
+
+@pytest.mark.parametrize("common", [True, False])
+def test_bootstrap_replicates_and_jackknife_equal_scoring_the_resampled_samples(common):
+    # the per-scan sums give exactly the scores of the samples repeated as often as their scan
+    # was drawn (score_map on the repeated samples is the independent reference)
+    sem, binary, s = _random_case(3)
+    b = ev.bootstrap_scores([sem, binary], s, n_boot=12, seed=4, common=common)
+    _, ok_sem = ev.scored_cells(sem, s)
+    _, ok_bin = ev.scored_cells(binary, s)
+    use = (ok_sem & ok_bin) if common else (ok_sem | ok_bin)
+    scans = np.unique(s.scan[use])
+    assert b["scan_weights"].shape == (12, len(scans)) and b["n_scans"] == len(scans)
+    assert np.all(b["scan_weights"].sum(axis=1) == len(scans))
+    assert np.ptp(b["scan_weights"]) > 0
+    cases = [(b["scan_weights"][r], b, "replicates", r) for r in range(12)]
+    cases += [(1 - np.eye(len(scans), dtype=int)[j], b, "jackknife", j) for j in range(len(scans))]
+    for i, m in enumerate((sem, binary)):
+        ok = (ok_sem & ok_bin) if common else (ok_sem, ok_bin)[i]
+        for w, boot, kind, r in cases:
+            rep = _repeated(ev.HeldOut(s.points[ok], s.occupied[ok], s.label[ok], s.scan[ok]),
+                            scans, w)
+            ref = ev.score_map(m, rep, keep_roc=False)
+            assert boot[f"auc_{kind}"][r, i] == pytest.approx(ref["auc"], abs=1e-12)
+            assert boot[f"occupied_recall_{kind}"][r, i] == pytest.approx(ref["occupied_recall"],
+                                                                         abs=1e-12)
+            if m is sem:
+                assert boot[f"accuracy_{kind}"][r, i] == pytest.approx(ref["accuracy"], abs=1e-12)
+                assert boot[f"miou_{kind}"][r, i] == pytest.approx(ref["miou"], abs=1e-12)
+            else:
+                assert np.isnan(boot[f"miou_{kind}"][r, i])
+
+
+def test_bca_interval_by_hand():
+    from scipy.stats import norm
+    r = np.arange(1000) / 999.0          # replicates uniform on [0, 1]
+    # symmetric jackknife (no acceleration) and the estimate at the median (no bias): percentile
+    pct = ev.bootstrap_interval(r, 0.5, method="percentile")
+    bca = ev.bootstrap_interval(r, 0.5, method="bca", jackknife=[0.0, 1.0, 0.5])
+    assert bca == pytest.approx(pct, abs=1e-12)
+    assert pct == pytest.approx(np.quantile(r, [0.025, 0.975]), abs=1e-12)
+    # a skewed jackknife [0, 0, 0, 1]: d = mean - j = (1/4, 1/4, 1/4, -3/4), sum d^2 = 3/4,
+    # sum d^3 = -3/8, a = -3/8 / (6 (3/4)^1.5); z0 = 0; the quantiles move to Phi(z / (1 - a z))
+    a = -0.375 / (6 * 0.75 ** 1.5)
+    z = norm.ppf([0.025, 0.975])
+    expect = np.quantile(r, norm.cdf(z / (1 - a * z)))
+    got = ev.bootstrap_interval(r, 0.5, method="bca", jackknife=[0, 0, 0, 1])
+    assert got == pytest.approx(tuple(expect), abs=1e-12)
+    assert got[0] < pct[0] and got[1] < pct[1]       # negative skew: the interval moves down
+    # an estimate below most replicates (bias): z0 = Phi^-1(0.2) moves both ends down
+    z0 = norm.ppf(200 / 1000)
+    est = (r[199] + r[200]) / 2                       # 200 replicates below it
+    got = ev.bootstrap_interval(r, est, method="bca", jackknife=[0.0, 1.0, 0.5])
+    assert got == pytest.approx(tuple(np.quantile(r, norm.cdf(2 * z0 + z))), abs=1e-12)
+    with pytest.raises(InputError):
+        ev.bootstrap_interval(r, 0.5, method="bca")
+    with pytest.raises(InputError):
+        ev.bootstrap_interval(r, 0.5, method="student")
+    with pytest.raises(InputError):
+        ev.bootstrap_interval([np.nan], 0.5)
+
+
+def test_paired_bca_difference_and_score_interval_use_the_paired_jackknife():
+    sem, binary, s = _random_case(8, n=200, n_scans=12)
+    b = ev.bootstrap_scores([sem, binary], s, n_boot=300, seed=2)
+    d = ev.paired_difference(b, 0, 1, method="bca")
+    direct = ev.bootstrap_interval(b["auc_replicates"][:, 0] - b["auc_replicates"][:, 1],
+                                   b["auc"][0] - b["auc"][1], method="bca",
+                                   jackknife=b["auc_jackknife"][:, 0] - b["auc_jackknife"][:, 1])
+    assert (d["lo"], d["hi"]) == direct and d["lo"] <= d["diff"] <= d["hi"]
+    one = ev.score_interval(b, 1, "auc", method="bca")
+    assert one["est"] == b["auc"][1] and one["lo"] < one["est"] < one["hi"]
+    # a map against itself: the difference and both ends are exactly zero, BCa as percentile
+    same = ev.bootstrap_scores([binary, binary], s, n_boot=50, seed=2)
+    d = ev.paired_difference(same, 0, 1, method="bca")
+    assert (d["diff"], d["lo"], d["hi"]) == (0.0, 0.0, 0.0)
+    with pytest.raises(InputError):
+        ev.bootstrap_scores([binary], s, n_boot=0)
