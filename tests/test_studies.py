@@ -49,3 +49,36 @@ def test_tune_threshold_maximises_balanced_accuracy_on_the_validation_scans():
     assert row["balanced"] >= best - 1e-12
     again = ev.threshold_scores(m, samples, t)
     assert (again["occupied_recall"] + again["free_accuracy"]) / 2 == row["balanced"]
+
+
+def test_kernel_validation_chooses_the_best_validation_score_without_the_test_scans():
+    """Each model's (l, sigma_0) has the best validation score of its metric (the homework's
+    setting on ties), the validation scans come from the mapping scans only, and a row's scores
+    are those of the map rebuilt here with that l and sigma_0."""
+    from hw4.evaluation import evaluate as ev
+    from hw4.tasks import build_map
+    split = ev.intel_split()
+    chosen, rows = studies.kernel_validation(lengths=(0.1, 0.2), sigmas=(0.1, 1.0),
+                                             grid_size=0.5, split=split)
+    assert set(chosen) == {2, 4} and len(rows) == 8
+    for task, metric in ((2, "auc"), (4, "miou")):
+        mine = [r for r in rows if r["task"] == task]
+        top = max(r[metric] for r in mine)
+        l, sg = chosen[task]
+        pick = [r for r in mine if (r["l"], r["sigma"]) == (l, sg)][0]
+        assert pick[metric] == top
+        ties = [r for r in mine if r[metric] == top]
+        if any((r["l"], r["sigma"]) == (0.2, 0.1) for r in ties):
+            assert (l, sg) == (0.2, 0.1)
+    data = ev.mapping_data(2, split)
+    fit_idx, val_idx = ev.split_scans(len(data.scans), 10, 4)
+    assert rows[0]["n_val"] == len(val_idx) and rows[0]["n_fit"] == len(fit_idx)
+    # the validation scans are mapping scans: none of them is a held-out test scan
+    assert not set(split.mapping[val_idx]) & set(split.held_out)
+    held = ev.subset(data, val_idx)
+    samples = ev.held_out_samples(held, np.arange(len(held.scans)), split.samples.step,
+                                  split.samples.margin)
+    m = build_map(2, 0.5, data=ev.subset(data, fit_idx), l=0.1, sigma=1.0)
+    ref = ev.score_map(m, samples, keep_roc=False)
+    row = [r for r in rows if (r["task"], r["l"], r["sigma"]) == (2, 0.1, 1.0)][0]
+    assert row["auc"] == pytest.approx(ref["auc"], abs=1e-12)
