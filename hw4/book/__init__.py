@@ -21,6 +21,7 @@ WINDOWS = {
     "regions": ((-12.0, 0.0), (-22.0, -10.0)),       # where four regions meet (Tasks 3-4)
     "north-east": ((2.0, 19.0), (-9.0, 8.0)),        # north-east rooms and the cluttered lab
     "south-west-wide": ((-12.0, 1.0), (-24.0, -13.0)),  # south-west rooms and corridor (T6)
+    "building": ((-12.5, 19.5), (-24.5, 8.0)),       # every observed cell, at every grid size
 }
 
 
@@ -231,4 +232,63 @@ def class_and_variance(m, axes, label: str, vmax: float = 0.25, window: str | No
     if window:
         for ax in axes:
             zoom(ax, window)
+    return im
+
+
+# --------------------------------------------------------------------------------------------
+# Claims glued from the comparison they state, and the resolution studies' figures
+# --------------------------------------------------------------------------------------------
+
+def ratio_words(ratio: float, tolerance: float = 0.15) -> str:
+    """A time ratio as the prose states it: "about as long as" within ``tolerance`` of 1,
+    else "1.8 times as long as" or "0.6 times as long as" (one decimal), so that a sentence
+    glued from it cannot claim a difference the measured times do not show."""
+    ratio = float(ratio)
+    if abs(ratio - 1.0) <= tolerance:
+        return "about as long as"
+    return f"{ratio:.1f} times as long as"
+
+
+def trend_words(values, rising: str = "rises", falling: str = "falls",
+                neither: str = "does not change monotonically") -> str:
+    """``falling`` if ``values`` strictly decrease, ``rising`` if they strictly increase, else
+    ``neither``: the verb of a sentence that quotes the values in order."""
+    d = np.diff(np.asarray(values, dtype=float))
+    if np.all(d < 0):
+        return falling
+    if np.all(d > 0):
+        return rising
+    return neither
+
+
+def check_variance_scale(maps, scale) -> float:
+    """Smallest variance of an observed cell over ``maps``; raises if it lies below the log
+    scale's lower end ``scale[0]`` (it would be clipped to the scale's darkest colour)."""
+    low = min(float(m.map["variance"][m.observed, 0].min()) for m in maps)
+    if low < scale[0]:
+        raise ValueError(f"observed variance {low:.3g} below the scale's lower end {scale[0]:g}")
+    return low
+
+
+def map_and_variance(m, axes, label: str, scale, window: str = "building"):
+    """One map of a resolution study as a pair of panels: the occupancy mean (binary maps) or
+    the most likely class (semantic maps) in ``axes[0]`` and the variance on the logarithmic
+    ``scale`` = (vmin, vmax) in ``axes[1]``, both zoomed onto ``window`` (default: the whole
+    observed building, without the empty margins of the template's map). A colour bar sits under
+    each panel that needs one; returns the variance image."""
+    from ..core import plotting
+    fig = axes[0].figure
+    if m.map["mean"].shape[1] > 1:        # semantic: class map, its legend is the figure's
+        plotting.plot_semantic(m, ax=axes[0], title=f"class, {label}", legend=False)
+    else:
+        im = plotting.plot_mean(m, ax=axes[0], title=f"mean, {label}", colorbar=False,
+                                unobserved=plotting.UNOBSERVED_LIGHT)
+        fig.colorbar(im, ax=axes[0], location="bottom", shrink=0.8, aspect=30,
+                     label="P(occupied)")
+    im = plotting.plot_variance(m, ax=axes[1], title=f"variance, {label}", vmax=scale[1],
+                                log=True, vmin=scale[0], colorbar=False,
+                                unobserved=plotting.UNOBSERVED_VARIANCE)
+    fig.colorbar(im, ax=axes[1], location="bottom", shrink=0.8, aspect=30, label="variance")
+    for ax in axes:
+        zoom(ax, window)
     return im

@@ -22,6 +22,12 @@ VARIANCE_CMAP = "viridis"
 OCCUPANCY_CMAP = "gray_r"
 UNOBSERVED_LIGHT = "#c6dbef"   # pale blue for cells without evidence (plot_mean(unobserved=...))
 UNOBSERVED_VARIANCE = "0.82"   # light grey, outside viridis, for them in plot_variance(unobserved=...)
+# The two logarithmic variance scales of the book's maps (vmin, vmax): one for the discrete models
+# (Tasks 1 and 3, whose cells with agreeing counts reach a few 1e-6) and one for the continuous
+# models (Tasks 2 and 4, each observation weighing at most sigma0, so none falls below 1e-4); a
+# figure comparing a discrete with a continuous map uses the discrete scale, which holds both.
+VARIANCE_LOG_DISCRETE = (4e-6, 0.25)
+VARIANCE_LOG_CONTINUOUS = (1e-4, 0.25)
 
 
 def style():
