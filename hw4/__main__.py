@@ -1,4 +1,4 @@
-"""Command line: ``python -m hw4 {run,data,bki,package} ...`` (``--help`` on each)."""
+"""Command line: ``python -m hw4 {run,data,bki,package,grade,check,autograder} ...`` (``--help`` on each)."""
 from __future__ import annotations
 
 import argparse
@@ -11,6 +11,7 @@ from .core.parser import OneLineParser
 def parser() -> argparse.ArgumentParser:
     from . import cli, package
     from .bki import cli as bki_cli
+    from .grading import cli as grading_cli
     p = OneLineParser(
         prog="python -m hw4",
         description="Mapping with counting sensor models (NA 568 HW4): build the maps of tasks "
@@ -19,6 +20,7 @@ def parser() -> argparse.ArgumentParser:
     cli.register(sub)
     bki_cli.register(sub)
     package.register(sub)
+    grading_cli.register(sub)
     return p
 
 

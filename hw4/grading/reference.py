@@ -1,0 +1,236 @@
+"""Reference maps, the family of legitimate variants, and the cell-by-cell comparison.
+
+Everything here runs in the grader's process, after the submission's child has ended: the
+reference arrays never exist where a submission could read them.
+
+Variants (continuous tasks; each is a documented reading of the handout): free samples every
+0.1 m (= l/2, the default), every 2l/3, every grid size, or only the sample closest to the cell
+(a later template's hint). Whether a sample falls on the end point depends on the last bit of
+the range (``np.arange(0, z, step)`` on a recomputed ``z``), so for each step a cell agrees when
+it matches the reference with samples strictly short of the end point OR the one that also
+samples the end point. The posterior uses the submission's own prior (its ``prior_alpha`` or
+``prior`` attribute, the prior its unobserved cells imply, or the template's 1e-3): priors from
+1e-19 to 0.5 are all legitimate.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ..core.evidence import count_evidence
+from ..core.grid import Grid
+from ..core.posterior import beta_mean_variance, dirichlet_mean_variance
+from ..tasks import load_task_data, model_class
+
+L = 0.2
+
+
+def variants(task: int, grid_size: float) -> list[tuple[str, dict]]:
+    """(label, count_evidence options) of the legitimate variants of a task."""
+    if not model_class(task).continuous:
+        return [("Algorithm 1 as written", {})]
+    out = []
+    for label, step in (("free samples every 0.1 m (l/2)", 0.1),
+                        ("free samples every 2l/3", 2 * L / 3),
+                        ("free samples every grid size", grid_size)):
+        out.append((label, {"sample_step": step}))
+    out.append(("closest free sample only (every 0.1 m)", {"sample_step": 0.1,
+                                                           "free_samples": "closest"}))
+    out.append(("closest free sample only (every grid size)", {"sample_step": grid_size,
+                                                               "free_samples": "closest"}))
+    return out
+
+
+_cache: dict = {}
+
+
+def evidence(task: int, grid_size: float, **opts) -> tuple[Grid, np.ndarray]:
+    """(grid, evidence counts) of the exact core for a task, a grid size and variant options."""
+    key = (task, float(grid_size), tuple(sorted(opts.items())))
+    if key not in _cache:
+        cls = model_class(task)
+        data = load_task_data(task)
+        scans = data.scans if cls.semantic else [s[:2] for s in data.scans]
+        grid = Grid(grid_size, n_classes=7 if cls.semantic else 2)
+        kw = dict(model="continuous" if cls.continuous else "discrete", semantic=cls.semantic)
+        if cls.semantic:
+            kw["num_labels"] = 6
+        _cache[key] = (grid, count_evidence(grid, data.poses, scans, **kw, **opts))
+    return _cache[key]
+
+
+def posterior(counts: np.ndarray, prior: float, semantic: bool) -> tuple[np.ndarray, np.ndarray]:
+    """(mean, variance) with prior ``prior`` added to every count. Binary: mean and variance
+    (n,); semantic: class means (n, K) and the variance of the most likely class (n,)."""
+    a = counts + prior
+    if semantic:
+        mean, var = dirichlet_mean_variance(a)
+        return mean, var[:, 0]
+    mean, var = beta_mean_variance(a[:, 0], a[:, 1])
+    return mean, var
+
+
+@dataclass
+class Comparison:
+    """Agreement of a submission's map with one reference."""
+    share: float                 # share of compared cells that agree, in [0, 1]
+    compared: int                # cells compared (observed by the reference, or differing)
+    agree: np.ndarray = field(repr=False)   # (n,) bool
+    ref_value: np.ndarray = field(repr=False)  # (n,) what the reference says (mean or class)
+    ref_var: np.ndarray = field(repr=False)
+    label: str = ""
+    prior: float = 0.0
+
+
+def student_arrays(mean, variance, n_cells: int, semantic: bool, n_classes: int = 7):
+    """Validate and reshape the arrays a submission returned; (mean, variance) or a reason."""
+    mean = np.asarray(mean)
+    variance = np.asarray(variance)
+    if mean.dtype.kind not in "fiu" or variance.dtype.kind not in "fiu":
+        return f"map['mean'] / map['variance'] are not numeric arrays ({mean.dtype}, {variance.dtype})"
+    want_mean = (n_cells, n_classes) if semantic else (n_cells,)
+    m = mean.reshape(n_cells, -1) if mean.size in (n_cells, n_cells * n_classes) else None
+    if m is None or (semantic and m.shape[1] != n_classes) or (not semantic and m.shape[1] != 1):
+        return (f"map['mean'] has shape {mean.shape}; expected {want_mean} (or (n, 1)) for "
+                f"{n_cells:,} cells: the grid size or the map extent was not used as given")
+    if variance.size != n_cells:
+        return (f"map['variance'] has shape {variance.shape}; expected ({n_cells},) or "
+                f"({n_cells}, 1)")
+    m = m.astype(float) if semantic else m[:, 0].astype(float)
+    v = variance.reshape(-1).astype(float)
+    bad = int((~np.isfinite(m)).sum() + (~np.isfinite(v)).sum())
+    if bad:
+        return f"map['mean'] / map['variance'] hold {bad:,} values that are NaN or infinite"
+    return m, v
+
+
+def compare(mean, var, counts, prior: float, semantic: bool, rtol: float, atol: float,
+            alt_counts=None) -> Comparison:
+    """Cell-by-cell agreement of (mean, var) with the reference of ``counts`` (or, per cell, of
+    ``alt_counts``: the end-point reading)."""
+    agree, ref_val, ref_var = _agree(mean, var, counts, prior, semantic, rtol, atol)
+    observed = counts.sum(axis=1) > 0
+    if alt_counts is not None:
+        agree2, _, _ = _agree(mean, var, alt_counts, prior, semantic, rtol, atol)
+        agree = agree | agree2
+        observed |= alt_counts.sum(axis=1) > 0
+    considered = observed | ~agree
+    n = int(considered.sum())
+    share = float(agree[considered].mean()) if n else 1.0
+    return Comparison(share, n, agree, ref_val, ref_var, prior=prior)
+
+
+def _agree(mean, var, counts, prior, semantic, rtol, atol):
+    ref_mean, ref_var = posterior(counts, prior, semantic)
+    var_ok = np.isclose(var, ref_var, rtol=rtol, atol=atol)
+    if semantic:
+        top = ref_mean.max(axis=1)
+        student_cls = np.argmax(mean, axis=1)
+        ref_cls = np.argmax(ref_mean, axis=1)
+        # a tie in the reference: any of the tied classes is right
+        tied = np.isclose(ref_mean[np.arange(len(top)), student_cls], top, rtol=rtol, atol=atol)
+        return tied & var_ok, ref_cls, ref_var
+    return np.isclose(mean, ref_mean, rtol=rtol, atol=atol) & var_ok, ref_mean, ref_var
+
+
+def implied_prior(var, counts, semantic: bool, n_classes: int = 7):
+    """The prior a submission's unobserved cells imply (their variance), or None."""
+    unobserved = counts.sum(axis=1) == 0
+    if not unobserved.any():
+        return None
+    v = float(np.median(var[unobserved]))
+    if not 0 < v < 1:
+        return None
+    if semantic:  # p = 1/K, var = p (1 - p) / (K a + 1)
+        p = 1.0 / n_classes
+        a = (p * (1 - p) / v - 1) / n_classes
+    else:  # var = 1 / (4 (2 a + 1))
+        a = (1 / (4 * v) - 1) / 2
+    return a if np.isfinite(a) and a > 0 else None
+
+
+def best_match(task: int, grid_size: float, mean, var, priors, rtol: float, atol: float):
+    """The legitimate variant and prior the submission matches best: (label, Comparison)."""
+    semantic = model_class(task).semantic
+    best = None
+    for label, opts in variants(task, grid_size):
+        _, counts = evidence(task, grid_size, **opts)
+        alt = None
+        if model_class(task).continuous:
+            _, alt = evidence(task, grid_size, **opts, end_sample=True)
+        cand = list(priors)
+        ip = implied_prior(var, counts, semantic)
+        if ip is not None:
+            cand.append(ip)
+        for prior in dict.fromkeys(p for p in cand if p is not None and np.isfinite(p) and p > 0):
+            c = compare(mean, var, counts, prior, semantic, rtol, atol, alt)
+            c.label = label
+            if best is None or c.share > best.share + 1e-12:
+                best = c
+            if best.share == 1.0:
+                return best
+    return best
+
+
+def diagnose(task: int, grid_size: float, mean, var, prior: float, rtol: float, atol: float):
+    """What a difference most likely means: (sentence, share of cells it explains) or None.
+
+    Each hypothesis is a deliberately wrong reference; the one the submission matches best
+    (at least 80 % of cells) is named.
+    """
+    cls = model_class(task)
+    semantic = cls.semantic
+    _, counts = evidence(task, grid_size)
+    hyps = []
+    free = counts.shape[1] - 1
+    zero_free = counts.copy()
+    zero_free[:, free] = 0
+    hyps.append(("free space is never updated (no free-space evidence)", zero_free))
+    zero_occ = counts.copy()
+    zero_occ[:, :free] = 0
+    hyps.append(("occupied (hit) evidence is never added", zero_occ))
+    hyps.append(("the map is never updated (every cell keeps its prior)", np.zeros_like(counts)))
+    if semantic:
+        shifted = np.zeros_like(counts)
+        shifted[:, 1:free] = counts[:, :free - 1]
+        shifted[:, free] = counts[:, free]
+        hyps.append(("label k is stored as k+1 (alpha indexed by the label, not label - 1)",
+                     shifted))
+        swapped = counts.copy()
+        swapped[:, [0, free]] = counts[:, [free, 0]]
+        hyps.append(("free-space evidence goes to class 1 (and class 1's to free space)", swapped))
+    else:
+        hyps.append(("alpha and beta are swapped (occupied counted as free)", counts[:, ::-1]))
+    if cls.continuous:
+        _, dense = evidence(task, grid_size, beams="all")
+        hyps.append(("every beam is used, not only the beam nearest in bearing", dense))
+    else:
+        _, cont = evidence(2 if not semantic else 4, grid_size)
+        hyps.append(("the continuous (kernel) model was submitted for the discrete task", cont))
+    if semantic:
+        _, half = evidence(task, grid_size, w_obstacle=grid_size) if not cls.continuous else (None, None)
+        if half is not None:
+            hyps.append(("the obstacle is one grid size thick (w_obstacle = grid_size)", half))
+    elif not cls.continuous:
+        _, half = evidence(task, grid_size, w_obstacle=grid_size)
+        hyps.append(("the obstacle is one grid size thick (w_obstacle = grid_size)", half))
+    best = None
+    for text, c in hyps:
+        comp = compare(mean, var, c, prior, semantic, rtol, atol)
+        if best is None or comp.share > best[1]:
+            best = (text, comp.share)
+    # mean right, variance wrong
+    ref_mean, ref_var = posterior(counts, prior, semantic)
+    if semantic:
+        mean_ok = np.argmax(mean, axis=1) == np.argmax(ref_mean, axis=1)
+    else:
+        mean_ok = np.isclose(mean, ref_mean, rtol=rtol, atol=atol)
+    var_ok = np.isclose(var, ref_var, rtol=rtol, atol=atol)
+    observed = counts.sum(axis=1) > 0
+    if observed.any() and mean_ok[observed].mean() > 0.97 and var_ok[observed].mean() < 0.5:
+        return ("the means agree but the variances do not: check the variance formula "
+                "(Eq. 3 / Eq. 10, the variance of the most likely class)", float(mean_ok[observed].mean()))
+    if best and best[1] >= 0.8:
+        return best
+    return None

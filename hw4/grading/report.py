@@ -1,0 +1,34 @@
+"""The Markdown report a student and a TA read beside ``results.json``."""
+from __future__ import annotations
+
+from pathlib import Path
+
+BUDGET = ("Maps are graded at {sizes} so that a solution as slow as the course template (about a "
+          "minute per task at 0.5 m) finishes all four tasks within Gradescope's 10 minutes on one "
+          "core; each task has {timeout:g} s and {memory} MB. A cell agrees when its mean and "
+          "variance (semantic: most likely class and its variance) match the exact reference within "
+          "a relative tolerance of {rtol:g} (absolute {atol:g}); the points grow linearly from "
+          "{lo:.0%} to {hi:.0%} of the compared cells (the cells any reference observes, and any "
+          "cell that differs). Legitimate readings of the handout (free-sample step 0.1 m, 2l/3 or "
+          "the grid size, the closest sample only, a sample on the end point or not, any prior) "
+          "each have their own reference: the best one counts.")
+
+
+def write_report(out: Path, results: dict, tests: list, notes: list, sizes: list, cfg: dict) -> Path:
+    """Write ``out/report.md``; return its path."""
+    lines = ["# HW4 mapping: autograder report", "", results["output"], ""]
+    lines.append(BUDGET.format(sizes=", ".join(f"{g:g} m" for g in sizes), timeout=cfg["timeout"],
+                               memory=cfg["memory"], rtol=cfg["rtol"], atol=cfg["atol"],
+                               lo=cfg["zero_credit_share"], hi=cfg["full_credit_share"]))
+    lines += ["", "| test | points | time |", "|---|---|---|"]
+    for t in tests:
+        secs = t.get("_seconds")
+        lines.append(f"| {t['name']} | {t['score']:g} / {t['max_score']:g} | "
+                     f"{'' if secs is None else f'{secs:g} s'} |")
+    for t in tests:
+        lines += ["", f"## {t['name']}", "", t["output"]]
+        if t.get("_figure"):
+            lines += ["", f"![reference, submission and differing cells]({t['_figure']})"]
+    path = Path(out) / "report.md"
+    path.write_text("\n".join(lines) + "\n")
+    return path

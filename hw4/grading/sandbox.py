@@ -1,0 +1,331 @@
+"""Run untrusted code in a child process that cannot harm the grader, the machine or the grade.
+
+Layers (each used where the machine allows it; :func:`isolation` says which are active):
+
+* a clean environment, a scratch working directory, ``python -I -S`` with an explicit
+  ``sys.path`` (the submission, the grader's ``utils``, a folder of links to numpy / scipy /
+  tqdm only), so that this project's package is not on the path;
+* rlimits: CPU time, address space, processes, file size, open files;
+* as root: a private network namespace (no network: only a down loopback), a private mount
+  namespace in which ``/tmp``, ``/var/tmp``, ``/dev/shm``, the grader's package, the output and
+  the other submissions are empty read-only tmpfs, and an unprivileged user (one per parallel
+  worker) so that file permissions and ``RLIMIT_NPROC`` apply;
+* after each task every process of the submission is killed: its process group, every process
+  of its user (as root), and any daemon re-parented to the grader (a child subreaper).
+
+Output (stdout and stderr) goes to files the child cannot reopen and is read back capped.
+"""
+from __future__ import annotations
+
+import ctypes
+import os
+import pwd
+import resource
+import shutil
+import signal
+import subprocess
+import sys
+import sysconfig
+import tempfile
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+
+CLONE_NEWNS = 0x00020000
+CLONE_NEWNET = 0x40000000
+MS_RDONLY, MS_NOSUID, MS_NODEV, MS_BIND, MS_REC, MS_PRIVATE = 1, 2, 4, 4096, 16384, 1 << 18
+PR_SET_CHILD_SUBREAPER = 36
+CHILD_PACKAGES = ("numpy", "numpy.libs", "scipy", "scipy.libs", "tqdm")
+USER_PREFIX = "hw4grader"
+ANCHOR = "/mnt"  # where the scratch folder appears inside the mount namespace
+
+_libc = None
+
+
+def _c():
+    global _libc
+    if _libc is None:
+        _libc = ctypes.CDLL(None, use_errno=True)
+    return _libc
+
+
+def _check(rc: int, what: str) -> None:
+    if rc != 0:
+        e = ctypes.get_errno()
+        raise OSError(e, f"{what}: {os.strerror(e)}")
+
+
+@dataclass
+class Limits:
+    """Per-task limits: wall clock [s], memory (address space) [MB], output kept [bytes]."""
+    timeout: float = 150.0
+    memory_mb: int = 2048
+    nproc: int = 64
+    fsize_mb: int = 64
+    nofile: int = 256
+    output_cap: int = 8000
+
+
+@dataclass
+class Result:
+    """What happened to one child run."""
+    returncode: int | None
+    timed_out: bool
+    seconds: float
+    stdout: str
+    stderr: str
+    leftovers_killed: int = 0
+    notes: list = field(default_factory=list)
+
+
+def is_root() -> bool:
+    return os.geteuid() == 0
+
+
+def _world_executable(path: str) -> bool:
+    """True when every directory on the way to ``path`` is o+x and the file o+rx."""
+    p = Path(path).resolve()
+    try:
+        for d in list(p.parents)[::-1]:
+            if not d.stat().st_mode & 0o001:
+                return False
+        return bool(p.stat().st_mode & 0o005 == 0o005)
+    except OSError:
+        return False
+
+
+def child_python(as_other_user: bool) -> str:
+    """The interpreter for the child: ours, or (when another user cannot reach ours) a system
+    Python of the same minor version, which can load the same compiled numpy and scipy."""
+    candidates = [sys.executable, os.path.realpath(sys.executable),
+                  f"/usr/bin/python{sys.version_info[0]}.{sys.version_info[1]}",
+                  f"/usr/local/bin/python{sys.version_info[0]}.{sys.version_info[1]}"]
+    for c in candidates:
+        if os.path.exists(c) and (not as_other_user or _world_executable(c)):
+            return c
+    return sys.executable
+
+
+def make_site(dest: Path) -> Path:
+    """A folder of links to the few packages a submission may import (numpy, scipy, tqdm)."""
+    dest.mkdir(parents=True, exist_ok=True)
+    purelib = Path(sysconfig.get_paths()["purelib"])
+    import numpy
+    roots = {purelib, Path(numpy.__file__).resolve().parents[1]}
+    for name in CHILD_PACKAGES:
+        for root in roots:
+            src = root / name
+            if src.exists() and not (dest / name).exists():
+                (dest / name).symlink_to(src.resolve())
+    return dest
+
+
+def ensure_user(slot: int = 0) -> tuple[int, int] | None:
+    """(uid, gid) of the unprivileged grading user of this worker slot, created when missing
+    (root only); None when not root or the user cannot be created."""
+    if not is_root():
+        return None
+    name = f"{USER_PREFIX}{slot}" if slot else USER_PREFIX
+    try:
+        pw = pwd.getpwnam(name)
+    except KeyError:
+        useradd = shutil.which("useradd") or "/usr/sbin/useradd"
+        subprocess.run([useradd, "--system", "--no-create-home", "--shell", "/usr/sbin/nologin",
+                        name], check=False, capture_output=True)
+        try:
+            pw = pwd.getpwnam(name)
+        except KeyError:
+            return None
+    return pw.pw_uid, pw.pw_gid
+
+
+_NS_OK = None
+
+
+def namespaces_available() -> bool:
+    """Whether private network and mount namespaces can be made here (root, not blocked)."""
+    global _NS_OK
+    if _NS_OK is None:
+        _NS_OK = False
+        if is_root():
+            try:
+                r = subprocess.run([sys.executable, "-I", "-S", "-c",
+                                    "import ctypes,sys;l=ctypes.CDLL(None,use_errno=True);"
+                                    f"sys.exit(l.unshare({CLONE_NEWNS | CLONE_NEWNET}))"],
+                                   capture_output=True, timeout=20)
+                _NS_OK = r.returncode == 0
+            except (OSError, subprocess.SubprocessError):
+                _NS_OK = False
+    return _NS_OK
+
+
+def set_subreaper() -> bool:
+    """Make this process adopt orphaned descendants, so that daemons can be found and killed."""
+    try:
+        return _c().prctl(PR_SET_CHILD_SUBREAPER, 1, 0, 0, 0) == 0
+    except (AttributeError, OSError):
+        return False
+
+
+def _children_of(pid: int) -> list[int]:
+    out = []
+    for d in os.listdir("/proc"):
+        if d.isdigit():
+            try:
+                with open(f"/proc/{d}/stat", "rb") as f:
+                    stat = f.read().decode("latin-1")
+                ppid = int(stat[stat.rindex(")") + 2:].split()[1])
+            except (OSError, ValueError, IndexError):
+                continue
+            if ppid == pid:
+                out.append(int(d))
+    return out
+
+
+def _kill_user(uid: int, gid: int) -> None:
+    """SIGKILL every process of ``uid`` (as that user, so nothing else can be hit)."""
+    pid = os.fork()
+    if pid == 0:  # pragma: no cover - child
+        try:
+            os.setgroups([])
+            os.setgid(gid)
+            os.setuid(uid)
+            for _ in range(5):
+                os.kill(-1, signal.SIGKILL)
+        except OSError:
+            pass
+        os._exit(0)
+    os.waitpid(pid, 0)
+
+
+def _reap_orphans(known: set) -> int:
+    """Kill and reap descendants re-parented to us (daemons that left the process group)."""
+    killed = 0
+    for _ in range(50):
+        kids = [p for p in _children_of(os.getpid()) if p not in known]
+        if not kids:
+            break
+        for p in kids:
+            try:
+                os.kill(p, signal.SIGKILL)
+                killed += 1
+            except ProcessLookupError:
+                pass
+        for p in kids:
+            try:
+                os.waitpid(p, 0)
+            except ChildProcessError:
+                pass
+        time.sleep(0.02)
+    return killed
+
+
+def _read_capped(path: Path, cap: int) -> str:
+    size = path.stat().st_size
+    with open(path, "rb") as f:
+        if size <= cap:
+            data = f.read()
+        else:
+            head = f.read(cap // 2)
+            f.seek(size - cap // 2)
+            data = head + f"\n... [{size - cap} bytes cut] ...\n".encode() + f.read()
+    return data.decode("utf-8", "replace")
+
+
+def run(argv: list, scratch: Path, limits: Limits, *, user: tuple | None = None,
+        hide: tuple = (), isolate_network: bool = True, writable: tuple = ()) -> Result:
+    """Run ``argv`` (interpreter and arguments) in ``scratch`` under the limits.
+
+    ``user`` (uid, gid): run as this unprivileged user (needs root), who owns ``scratch`` and
+    the ``writable`` paths in it (everything else there stays the grader's, read-only);
+    ``hide``: folders made empty and read-only inside the child's mount namespace.
+    """
+    scratch = Path(scratch).resolve()
+    notes = []
+    use_ns = isolate_network and namespaces_available()
+    if not use_ns:
+        notes.append("network and mount namespaces unavailable: the network is not cut")
+    if user is None:
+        notes.append("not run as root: no separate user, file permissions are the grader's")
+    hide = [os.path.realpath(h) for h in hide if h and os.path.isdir(h)]
+    if user:
+        os.lchown(scratch, *user)
+        for w in writable:
+            for root, dirs, files in os.walk(scratch / w):
+                for n in [root, *[os.path.join(root, x) for x in dirs + files]]:
+                    os.lchown(n, *user)
+    env = {"PATH": "/usr/bin:/bin", "LANG": "C.UTF-8", "HOME": ANCHOR if use_ns else str(scratch),
+           "TMPDIR": ANCHOR if use_ns else str(scratch), "OMP_NUM_THREADS": "1",
+           "OPENBLAS_NUM_THREADS": "1", "MKL_NUM_THREADS": "1", "PYTHONHASHSEED": "0",
+           "PYTHONDONTWRITEBYTECODE": "1", "TQDM_DISABLE": "1", "MPLBACKEND": "Agg"}
+    nproc = limits.nproc
+    if user is None and not is_root():  # RLIMIT_NPROC counts every process of our uid
+        nproc += sum(1 for d in os.listdir("/proc") if d.isdigit()
+                     and _owner(d) == os.getuid())
+    cpu = int(limits.timeout) + 5
+    mem = int(limits.memory_mb) * 2**20
+
+    def preexec():  # pragma: no cover - runs in the forked child before exec
+        if use_ns:
+            libc = _c()
+            _check(libc.unshare(CLONE_NEWNS | CLONE_NEWNET), "unshare")
+            _check(libc.mount(b"none", b"/", None, MS_REC | MS_PRIVATE, None), "mount private")
+            _check(libc.mount(str(scratch).encode(), ANCHOR.encode(), None, MS_BIND | MS_REC,
+                              None), "bind scratch")
+            for d in ("/tmp", "/var/tmp", "/dev/shm"):
+                if os.path.isdir(d):
+                    libc.mount(b"tmpfs", d.encode(), b"tmpfs", MS_NOSUID | MS_NODEV,
+                               b"size=16m,mode=1777")
+            for d in hide:
+                if os.path.isdir(d):
+                    libc.mount(b"tmpfs", d.encode(), b"tmpfs", MS_RDONLY | MS_NOSUID | MS_NODEV,
+                               b"size=4k,mode=0555")
+            os.chdir(ANCHOR)
+        else:
+            os.chdir(scratch)
+        os.umask(0o077)
+        if user:
+            os.setgroups([])
+            os.setgid(user[1])
+            os.setuid(user[0])
+        for res, val in ((resource.RLIMIT_CPU, cpu), (resource.RLIMIT_AS, mem),
+                         (resource.RLIMIT_NPROC, nproc),
+                         (resource.RLIMIT_FSIZE, limits.fsize_mb * 2**20),
+                         (resource.RLIMIT_NOFILE, limits.nofile), (resource.RLIMIT_CORE, 0)):
+            resource.setrlimit(res, (val, val))
+
+    logs = Path(tempfile.mkdtemp(prefix="hw4grade-log-"))
+    out_path, err_path = logs / "stdout", logs / "stderr"
+    known = set(_children_of(os.getpid()))
+    t0 = time.monotonic()
+    timed_out = False
+    with open(out_path, "wb") as fo, open(err_path, "wb") as fe:
+        proc = subprocess.Popen(argv, stdin=subprocess.DEVNULL, stdout=fo, stderr=fe, env=env,
+                                preexec_fn=preexec, start_new_session=True, close_fds=True)
+        try:
+            proc.wait(timeout=limits.timeout)
+        except subprocess.TimeoutExpired:
+            timed_out = True
+    seconds = time.monotonic() - t0
+    try:
+        os.killpg(proc.pid, signal.SIGKILL)
+    except (ProcessLookupError, PermissionError):
+        pass
+    if user:
+        _kill_user(*user)
+    proc.wait()
+    killed = _reap_orphans(known | {proc.pid})
+    if user:
+        _kill_user(*user)
+    res = Result(None if timed_out else proc.returncode, timed_out, seconds,
+                 _read_capped(out_path, limits.output_cap), _read_capped(err_path, limits.output_cap),
+                 killed, notes)
+    shutil.rmtree(logs, ignore_errors=True)
+    return res
+
+
+def _owner(pid: str) -> int:
+    try:
+        return os.stat(f"/proc/{pid}").st_uid
+    except OSError:
+        return -1
