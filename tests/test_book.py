@@ -62,3 +62,43 @@ def test_put_interval_signed_text_uses_a_minus_sign():
     assert got["d"] == -0.2268 and got["d_lo"] == -0.269
     assert [got[k] for k in ("d_s", "d_lo_s", "d_hi_s")] == ["\u22120.227", "\u22120.269", "+0.013"]
     assert "-" not in got["d_s"]
+
+
+def test_ratio_words_state_only_the_difference_the_times_show():
+    assert book.ratio_words(1.76) == "1.8 times as long as"
+    assert book.ratio_words(0.064 / 0.065) == "about as long as"
+    assert book.ratio_words(1.15) == "about as long as"
+    assert book.ratio_words(1.2) == "1.2 times as long as"
+    assert book.ratio_words(0.5) == "0.5 times as long as"
+
+
+def test_trend_words_follow_the_order_of_the_values():
+    assert book.trend_words([0.219, 0.213, 0.179]) == "falls"
+    assert book.trend_words([0.1, 0.2, 0.3]) == "rises"
+    assert book.trend_words([0.2, 0.2, 0.1]) == "does not change monotonically"
+    assert book.trend_words([0.2, 0.3, 0.1], neither="varies") == "varies"
+
+
+def test_check_variance_scale_refuses_a_scale_that_would_clip_observed_cells():
+    from hw4.core import plotting
+    from hw4.tasks import build_map
+    m = build_map(1, grid_size=0.5)
+    low = book.check_variance_scale([m], plotting.VARIANCE_LOG_DISCRETE)
+    assert low == float(m.map["variance"][m.observed, 0].min())
+    with pytest.raises(ValueError, match="below the scale"):
+        book.check_variance_scale([m], (2 * low, 0.25))
+
+
+def test_map_and_variance_draws_both_panels_on_the_given_scale():
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    from hw4.tasks import build_map
+    for task in (2, 4):   # binary and semantic
+        m = build_map(task, grid_size=0.5)
+        fig, axes = plt.subplots(1, 2)
+        im = book.map_and_variance(m, axes, "0.5 m", (1e-4, 0.25))
+        assert (im.norm.vmin, im.norm.vmax) == (1e-4, 0.25)
+        assert axes[0].get_xlim() == book.WINDOWS["building"][0]
+        assert axes[1].get_ylim() == book.WINDOWS["building"][1]
+        plt.close(fig)
