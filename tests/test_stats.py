@@ -204,3 +204,23 @@ def test_uncovered_share():
     # step 0.5, l 0.2, samples at 0, 0.5, 1, 1.5: three bare stretches of 0.1 m between samples
     # and 0.3 m from 1.7 m to the end point (which the end point's own evidence covers)
     assert illustrate.uncovered_share(2.0, 0.5) == pytest.approx(0.3, abs=1e-3)
+
+
+def test_seed_interval_is_students_t_interval_of_the_mean():
+    from hw4.evaluation.stats import seed_interval
+    from hw4.core.errors import InputError
+    # five seeds: mean 3, sample sd sqrt(2.5); t(0.975, 4) = 2.7764451
+    r = seed_interval([1.0, 2.0, 3.0, 4.0, 5.0])
+    half = 2.7764451051977987 * np.sqrt(2.5) / np.sqrt(5)
+    assert r["n"] == 5 and r["mean"] == 3.0 and r["sd"] == pytest.approx(np.sqrt(2.5))
+    assert (r["lo"], r["hi"]) == (pytest.approx(3 - half), pytest.approx(3 + half))
+    assert (r["min"], r["max"]) == (1.0, 5.0)
+    # one interval per column; identical runs give a zero-width interval
+    m = seed_interval(np.array([[1.0, 7.0], [2.0, 7.0], [3.0, 7.0], [4.0, 7.0], [5.0, 7.0]]))
+    np.testing.assert_allclose(m["lo"], [3 - half, 7.0])
+    np.testing.assert_allclose(m["hi"], [3 + half, 7.0])
+    for bad in ([1.0], [1.0, np.nan]):
+        with pytest.raises(InputError):
+            seed_interval(bad)
+    with pytest.raises(InputError):
+        seed_interval([1.0, 2.0], level=1.0)

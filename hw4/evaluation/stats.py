@@ -254,3 +254,42 @@ def summary(ogm, threshold: float = 0.5) -> dict:
         "evidence_per_cell": evidence_per_cell(ogm),
         "interior_gaps": interior_gaps(ogm),
     }
+
+
+def seed_interval(values, level: float = 0.95) -> dict:
+    """Mean of a score over repeated runs with different seeds, and its interval.
+
+    For a study whose input is random (e.g. the simulated segmenter of Task 5's beyond section,
+    one run per seed), the runs are independent draws: the interval is Student's t interval of
+    the mean, ``mean +- t_{(1+level)/2, n-1} * sd / sqrt(n)``, with ``sd`` the sample standard
+    deviation (``ddof=1``) over the ``n`` seeds.
+
+    Parameters
+    ----------
+    values : (n,) or (n, ...) array_like
+        One score per seed along the first axis (more axes: one interval per entry, e.g. per
+        error rate and map).
+    level : float
+        Coverage, strictly between 0 and 1.
+
+    Returns
+    -------
+    dict of arrays (scalars for 1-D input): ``mean``, ``sd``, ``lo``, ``hi``, ``min``, ``max``
+    and ``n`` (seeds).
+    """
+    from scipy.stats import t as student_t
+
+    from ..core.errors import InputError
+    v = np.asarray(values, dtype=float)
+    if v.ndim == 0 or v.shape[0] < 2:
+        raise InputError("seed_interval needs scores from at least two seeds (first axis).")
+    if not np.all(np.isfinite(v)):
+        raise InputError("seed_interval: the scores contain NaN or inf.")
+    if not 0 < level < 1:
+        raise InputError(f"level must lie strictly between 0 and 1; got {level!r}.")
+    n = v.shape[0]
+    mean, sd = v.mean(axis=0), v.std(axis=0, ddof=1)
+    half = student_t.ppf((1 + level) / 2, n - 1) * sd / np.sqrt(n)
+    out = {"mean": mean, "sd": sd, "lo": mean - half, "hi": mean + half, "min": v.min(axis=0),
+           "max": v.max(axis=0), "n": n}
+    return {k: (float(x) if np.ndim(x) == 0 else x) for k, x in out.items()}

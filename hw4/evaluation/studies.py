@@ -95,8 +95,9 @@ def kernel_validation(lengths=LENGTHS, sigmas=SIGMAS, grid_size: float = 0.135, 
     built from the rest for every ``l`` (one build per ``l``; ``sigma_0`` rescales the evidence
     exactly, as in :func:`kernel_study`) and scored on the validation scans' samples. Each task
     is chosen by its own score (``metrics``, default :data:`KERNEL_METRICS`: the continuous CSM
-    by occupancy AUC, the continuous S-CSM by mIoU). Equal scores keep the homework's setting
-    ``default`` (``(l, sigma_0)``) if it is among them, else the first in the order of
+    by occupancy AUC, the continuous S-CSM by mIoU). Equal scores keep the homework's ``l``
+    of ``default`` (``(l, sigma_0)``) if it is among them, then its ``sigma_0`` (the most likely
+    class, hence the mIoU, does not depend on ``sigma_0``), else the first in the order of
     ``lengths`` x ``sigmas``.
 
     Returns
@@ -122,9 +123,8 @@ def kernel_validation(lengths=LENGTHS, sigmas=SIGMAS, grid_size: float = 0.135, 
                        "accuracy": np.nan, "miou": np.nan}
                 row.update(ev.score_map(m, samples, keep_roc=False))
                 mine.append(row)
-        best = max(mine, key=lambda r: (r[r["metric"]],
-                                        np.isclose(r["l"], default[0]) and
-                                        np.isclose(r["sigma"], default[1])))
+        best = max(mine, key=lambda r: (r[r["metric"]], bool(np.isclose(r["l"], default[0])),
+                                        bool(np.isclose(r["sigma"], default[1]))))
         chosen[task] = (best["l"], best["sigma"])
         rows += mine
     return chosen, rows
