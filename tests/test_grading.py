@@ -1,0 +1,284 @@
+"""The grader (``python -m hw4 grade / check / autograder``): exact scoring, broken variants,
+attacks contained, safe extraction, results.json against Gradescope's specification, the
+autograder zip in a simulated /autograder tree.
+
+Maps are graded at 1 m here (1,296 cells) to keep the tests short; the submissions are the
+purpose-written ones in ``tests/grading_fixtures``.
+"""
+from __future__ import annotations
+
+import io
+import json
+import os
+import shutil
+import socket
+import subprocess
+import sys
+import tarfile
+import threading
+import uuid
+import zipfile
+from pathlib import Path
+
+import jsonschema
+import pytest
+
+from hw4.__main__ import main
+from hw4.core.errors import InputError
+from hw4.grading import archive, sandbox
+from hw4.grading.grade import grade
+
+FIX = Path(__file__).parent / "grading_fixtures"
+G = [1.0]
+SCHEMA = json.loads((Path(__file__).parents[1] / "hw4" / "grading" / "results_schema.json").read_text())
+STRONG = sandbox.is_root() and sandbox.namespaces_available()
+
+
+def _sub(tmp: Path, name: str, overlay: str | None = None, **fill) -> Path:
+    d = tmp / name
+    shutil.copytree(FIX / "exact", d, ignore=shutil.ignore_patterns("__pycache__"))
+    if overlay:
+        for f in (FIX / overlay).glob("*.py"):
+            text = f.read_text()
+            for k, v in fill.items():
+                text = text.replace("{" + k + "}", str(v))
+            (d / f.name).write_text(text)
+    return d
+
+
+def _tests(res):
+    return {int(t["name"].split()[1]): t for t in res["tests"]}
+
+
+def _valid(res):
+    jsonschema.validate(res, SCHEMA)
+
+
+@pytest.fixture(scope="module")
+def exact_results(tmp_path_factory):
+    tmp = tmp_path_factory.mktemp("exact")
+    d = _sub(tmp, "uniq_hw4")
+    tgz = tmp / "uniq_hw4.tgz"
+    with tarfile.open(tgz, "w:gz") as t:
+        t.add(d, arcname="uniq_hw4")
+    out = tmp / "out"
+    return grade(tgz, out, grid_sizes=G), out
+
+
+def test_exact_submission_full_marks(exact_results):
+    res, out = exact_results
+    _valid(res)
+    assert res["score"] == 70
+    for n, t in _tests(res).items():
+        assert t["score"] == t["max_score"] == {1: 20, 2: 15, 3: 20, 4: 15}[n], t["output"]
+        assert t["name"].startswith(f"Task {n}") and t["status"] == "passed"
+    assert json.loads((out / "results.json").read_text()) == res
+    assert "Task 4" in (out / "report.md").read_text()
+
+
+def test_broken_variants_lose_only_their_task(tmp_path):
+    res = grade(_sub(tmp_path, "broken", "broken"), tmp_path / "out", grid_sizes=G)
+    _valid(res)
+    t = _tests(res)
+    assert all(t[n]["score"] <= 0.2 * t[n]["max_score"] for n in t), res
+    assert "alpha and beta are swapped" in t[1]["output"]
+    assert "free space is never updated" in t[2]["output"]
+    assert "label k is stored as k+1" in t[3]["output"]
+    assert "expected (1296, 7)" in t[4]["output"]
+    assert (tmp_path / "out" / "figures" / "task1_grid1.png").is_file()
+    assert "First differing cells" in t[2]["output"]
+    # each broken file alone, beside three exact ones, costs only its task
+    one = _sub(tmp_path, "one")
+    shutil.copyfile(FIX / "broken" / "ogm_continuous_CSM.py", one / "ogm_continuous_CSM.py")
+    res1 = grade(one, tmp_path / "out1", grid_sizes=G)
+    assert [x["score"] for x in res1["tests"]] == [20, 0, 20, 15]
+
+
+def _ps_with(token: str) -> list:
+    hits = []
+    for d in os.listdir("/proc"):
+        if d.isdigit():
+            try:
+                if token.encode() in Path(f"/proc/{d}/cmdline").read_bytes():
+                    hits.append(int(d))
+            except OSError:
+                pass
+    return hits
+
+
+def test_attacks_import_network_writes_daemon_timeout(tmp_path):
+    server = socket.socket()
+    server.bind(("127.0.0.1", 0))
+    server.listen(5)
+    server.settimeout(0.2)
+    got = []
+
+    def accept():
+        while not stop.is_set():
+            try:
+                got.append(server.accept())
+            except OSError:
+                pass
+    stop = threading.Event()
+    th = threading.Thread(target=accept, daemon=True)
+    th.start()
+    token = uuid.uuid4().hex
+    outside = tmp_path / "outside"
+    outside.mkdir(mode=0o777)
+    outside.chmod(0o777)
+    sub = _sub(tmp_path, "attack", "attacks_a", PORT=server.getsockname()[1], TOKEN=token,
+               OUTSIDE=outside)
+    try:
+        res = grade(sub, tmp_path / "out", grid_sizes=G, timeout=30, hide=(str(outside),))
+    finally:
+        stop.set()
+        th.join()
+        server.close()
+    _valid(res)
+    t = _tests(res)
+    if STRONG:
+        assert t[1]["score"] == 0 and "hw4" in t[1]["output"], t[1]["output"]
+        assert not got, "the submission reached the network"
+        assert "network blocked" in t[2]["output"]
+        for p in (Path("/tmp"), Path("/var/tmp"), Path("/dev/shm"), outside, tmp_path):
+            assert not (p / f"hw4-attack-{token}").exists()
+    assert t[2]["score"] == 15 and t[3]["score"] == 20  # the attacks still mapped correctly
+    assert t[4]["score"] == 0 and "timed out" in t[4]["output"]
+    assert not _ps_with(f"hw4-daemon-{token}"), "a daemon of the submission is still alive"
+
+
+def test_naive_import_of_the_grader_scores_zero(tmp_path):
+    sub = _sub(tmp_path, "naive")
+    for f in sub.glob("ogm_*.py"):
+        f.unlink()
+    (sub / "ogm_CSM.py").write_text("from hw4.ogm_CSM import ogm_CSM  # noqa: F401\n")
+    res = grade(sub, tmp_path / "out", grid_sizes=G)
+    t = _tests(res)
+    assert t[1]["score"] == 0 and "No module named 'hw4" in t[1]["output"]
+    assert "missing from the submission" in t[2]["output"]
+
+
+def test_attacks_memory_forks_forgery_flood(tmp_path, capfd):
+    res = grade(_sub(tmp_path, "attack_b", "attacks_b"), tmp_path / "out", grid_sizes=G,
+                timeout=60)
+    _valid(res)
+    t = _tests(res)
+    assert t[1]["score"] == 0 and "memory" in t[1]["output"], t[1]["output"]
+    assert t[2]["score"] == 0 and "forked" in t[2]["output"]
+    if sandbox.is_root():
+        n = int(t[2]["output"].split("forked ")[1].split()[0])
+        assert n < sandbox.Limits().nproc
+        uid = sandbox.ensure_user(0)[0]
+        alive = [d for d in os.listdir("/proc") if d.isdigit() and sandbox._owner(d) == uid]
+        assert not alive, "processes of the sandbox user survived"
+    assert t[3]["score"] == 0 and "not a plain array" in t[3]["output"]
+    assert "PICKLE EXECUTED" not in capfd.readouterr().out
+    assert res["score"] == 15  # the flood is capped, the map still graded
+    assert len(t[4]["output"]) < 10000
+    assert not (tmp_path / "out" / "out").exists()
+
+
+def _tar(path: Path, members: list) -> Path:
+    with tarfile.open(path, "w:gz") as t:
+        for name, kind, data in members:
+            info = tarfile.TarInfo(name)
+            if kind == "sym":
+                info.type, info.linkname = tarfile.SYMTYPE, data
+                t.addfile(info)
+            else:
+                info.size = len(data)
+                t.addfile(info, io.BytesIO(data))
+    return path
+
+
+@pytest.mark.parametrize("name,kind,data,expect", [
+    ("../evil.py", "file", b"x", "leaving its folder"),
+    ("/abs/evil.py", "file", b"x", "absolute path"),
+    ("a/../../evil.py", "file", b"x", "leaving its folder"),
+])
+def test_unsafe_archive_paths_refused(tmp_path, name, kind, data, expect):
+    arc = _tar(tmp_path / "s.tgz", [(name, kind, data)])
+    with pytest.raises(InputError, match=expect):
+        archive.extract(arc, tmp_path / "x")
+    assert not (tmp_path / "evil.py").exists()
+
+
+def test_archive_links_odd_names_and_caps(tmp_path):
+    arc = _tar(tmp_path / "s.tgz", [("u_hw4/ogm_CSM.py", "sym", "/etc/passwd"),
+                                   ("u_hw4/we ird\nname.py", "file", b"x"),
+                                   ("u_hw4/ogm_S_CSM.py", "file", b"pass\n")])
+    notes = archive.extract(arc, tmp_path / "x")
+    assert any("link" in n for n in notes) and any("unusual name" in n for n in notes)
+    assert not (tmp_path / "x" / "u_hw4" / "ogm_CSM.py").exists()
+    assert (tmp_path / "x" / "u_hw4" / "ogm_S_CSM.py").read_text() == "pass\n"
+    many = _tar(tmp_path / "many.tgz", [(f"f{i}.py", "file", b"") for i in range(archive.MAX_FILES + 1)])
+    with pytest.raises(InputError, match="more than"):
+        archive.extract(many, tmp_path / "y")
+    big = tmp_path / "bomb.zip"
+    with zipfile.ZipFile(big, "w", zipfile.ZIP_DEFLATED) as z:
+        z.writestr("u/ogm_CSM.py", b"0" * (archive.MAX_FILE_BYTES + 1))
+    with pytest.raises(InputError, match="MB"):
+        archive.extract(big, tmp_path / "z")
+
+
+def test_unreadable_submission_still_gets_results(tmp_path):
+    bad = tmp_path / "u_hw4.tgz"
+    bad.write_bytes(b"not an archive")
+    assert main(["grade", str(bad), "--out", str(tmp_path / "o"), "--grid-size", "1"]) == 0
+    res = json.loads((tmp_path / "o" / "results.json").read_text())
+    _valid(res)
+    assert res["score"] == 0 and "not a readable archive" in res["output"]
+
+
+def test_grade_exit_status(tmp_path, capsys):
+    assert main(["grade", str(tmp_path / "missing"), "--out", str(tmp_path / "o")]) == 2
+    assert "does not exist" in capsys.readouterr().err
+    f = tmp_path / "file"
+    f.write_text("")
+    assert main(["grade", str(FIX / "broken"), "--out", str(f / "o")]) == 2
+    assert "cannot write" in capsys.readouterr().err
+
+
+def test_check_and_batch(tmp_path, capsys):
+    one = tmp_path / "mine"
+    one.mkdir()
+    shutil.copyfile(FIX / "broken" / "ogm_CSM.py", one / "ogm_CSM.py")  # needs mapping_core
+    assert main(["check", str(one), "--out", str(tmp_path / "c")]) == 0
+    out = capsys.readouterr().out
+    assert "Task 1 (CSM)" in out and "mapping_core" in out
+    assert (tmp_path / "c" / "report.md").is_file()
+    subs = tmp_path / "subs"
+    subs.mkdir()
+    shutil.copytree(one, subs / "alice_hw4")
+    with zipfile.ZipFile(subs / "bob_hw4.zip", "w") as z:
+        z.writestr("bob_hw4/ogm_S_CSM.py", "raise SystemExit(3)\n")
+    assert main(["grade", str(subs), "--batch", "--out", str(tmp_path / "b"), "--jobs", "2",
+                 "--grid-size", "1"]) == 0
+    rows = (tmp_path / "b" / "grades.csv").read_text().splitlines()
+    assert rows[0].startswith("student,submission,task1,task2,task3,task4,total")
+    assert [r.split(",")[0] for r in rows[1:]] == ["alice", "bob"]
+    for who in ("alice", "bob"):
+        _valid(json.loads((tmp_path / "b" / who / "results.json").read_text()))
+
+
+def test_autograder_zip_in_simulated_tree(tmp_path):
+    z = tmp_path / "autograder.zip"
+    assert main(["autograder", "--out", str(z)]) == 0
+    root = tmp_path / "autograder"
+    with zipfile.ZipFile(z) as f:
+        names = f.namelist()
+        assert {"setup.sh", "run_autograder", "config.toml", "pyproject.toml"} <= set(names)
+        assert "data/intel/sample_Intel_dataset.mat" in names
+        f.extractall(root / "source")
+    cfg = root / "source" / "config.toml"
+    cfg.write_text(cfg.read_text().replace("grid_sizes = [0.5]", "grid_sizes = [1.0]"))
+    shutil.copytree(FIX / "exact", root / "submission", ignore=shutil.ignore_patterns("__pycache__"))
+    run = root / "source" / "run_autograder"
+    r = subprocess.run(["bash", str(run)], env={**os.environ, "AUTOGRADER_ROOT": str(root),
+                                                "HW4_PYTHON": sys.executable},
+                       capture_output=True, text=True, timeout=600)
+    assert r.returncode == 0, r.stderr
+    res = json.loads((root / "results" / "results.json").read_text())
+    _valid(res)
+    assert res["score"] == 70
+    assert subprocess.run(["bash", "-n", str(root / "source" / "setup.sh")]).returncode == 0
