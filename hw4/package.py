@@ -5,7 +5,9 @@ Gradescope takes two attachments (handout, "Submission Instructions"):
 1. ``NAME_hw4.tgz`` holding the directory ``NAME_hw4/`` with the four model files
    ``ogm_CSM.py``, ``ogm_continuous_CSM.py``, ``ogm_S_CSM.py``, ``ogm_continuous_S_CSM.py``
    (plus ``ogm_continous_S_CSM.py``, the misspelt module name the course's ``run.py`` imports);
-2. ``NAME_hw4.pdf``, the written part: this book's PDF.
+2. ``NAME_hw4.pdf``, the written part: the report edition of the book (``report/``,
+   :mod:`hw4.book.report`), about 15 pages with each task's question, required figures and
+   answer, the student's name on its title page.
 
 Task 5 asks for "a video of the mapping sequence included in the submission": the tgz also holds
 ``NAME_hw4/videos/`` with the mapping videos the Task 5 chapter writes (:data:`VIDEOS`:
@@ -48,7 +50,8 @@ FACES = ("ogm_CSM", "ogm_continuous_CSM", "ogm_S_CSM", "ogm_continuous_S_CSM",
 CLASSES = {"ogm_CSM": "ogm_CSM", "ogm_continuous_CSM": "ogm_continuous_CSM",
            "ogm_S_CSM": "ogm_S_CSM", "ogm_continuous_S_CSM": "ogm_continuous_S_CSM",
            "ogm_continous_S_CSM": "ogm_continous_S_CSM"}
-PDF_CANDIDATES = ("_build/hw4_book.pdf", "_build/latex/hw4_book.pdf")
+PDF_CANDIDATES = ("_build/hw4_report.pdf",)
+"""The report edition's PDF (``bash scripts/build_book.sh report``), relative to the project."""
 UNIQNAME = re.compile(r"[a-z0-9]{1,8}")
 VIDEOS = ("notebooks/_static/t5_kitti04_mapping.mp4", "notebooks/_static/bki_mapping.mp4")
 """The Task 5 mapping videos (written by notebooks/T5_bki_3d.ipynb), relative to the project."""
@@ -268,14 +271,14 @@ def validate_uniqname(name: str) -> str:
 
 
 def find_pdf(pdf: str | Path | None = None) -> Path:
-    """The book PDF: ``pdf`` when given, else the built book under ``_build/``."""
+    """The written part: ``pdf`` when given, else the built report under ``_build/``."""
     if pdf is not None:
         path = Path(pdf)
         if path.is_dir():
             raise InputError(f"--pdf {path} is a folder, not a PDF file.")
         if not path.is_file():
-            raise InputError(f"the PDF {path} does not exist: build the book with "
-                             "`bash scripts/build_book.sh pdf` or give the path of your PDF.")
+            raise InputError(f"the PDF {path} does not exist: build the report with "
+                             "`bash scripts/build_book.sh report` or give the path of your PDF.")
         try:
             with open(path, "rb") as f:
                 head = f.read(5)
@@ -288,41 +291,41 @@ def find_pdf(pdf: str | Path | None = None) -> Path:
         path = PROJECT_ROOT / rel
         if path.is_file() and path.stat().st_size > 0:
             return path
-    raise InputError("the book PDF has not been built yet (no _build/hw4_book.pdf): run "
-                     "`bash scripts/build_book.sh pdf` first, or pass --pdf PATH.")
+    raise InputError("the report PDF has not been built yet (no _build/hw4_report.pdf): run "
+                     "`bash scripts/build_book.sh report` first, or pass --pdf PATH.")
 
 
 def build_named_pdf(name: str) -> Path | None:
-    """Rebuild the book's PDF with ``name`` on its title page; return its path.
+    """Build the report edition with ``name`` on its title page; return its path.
 
-    Runs ``scripts/build_book.sh pdf`` with ``HW4_BOOK_AUTHOR=name`` (read by the book's Sphinx
-    extension, ``book/_ext/hw4_book.py``), which writes ``_build/hw4_book.pdf``. Returns None when
-    this checkout has no build script (then the PDF already built is used).
+    Runs ``scripts/build_book.sh report`` with ``HW4_BOOK_AUTHOR=name`` (the report's author),
+    which writes ``_build/hw4_report.pdf``. Returns None when this checkout has no build script
+    (then the report already built is used).
     """
     script = PROJECT_ROOT / "scripts" / "build_book.sh"
     if not script.is_file():
         return None
     env = dict(os.environ, HW4_BOOK_AUTHOR=name)
-    pdf = PROJECT_ROOT / "_build" / "hw4_book.pdf"
+    pdf = PROJECT_ROOT / PDF_CANDIDATES[0]
     # the build removes the old PDF first: keep a copy to fall back on if it fails
     backup = None
     if pdf.is_file():
         backup = Path(tempfile.mkdtemp(prefix="hw4-pdf-")) / pdf.name
         shutil.copyfile(pdf, backup)
-    print(f"package: building the book PDF with {name} on its title page", file=sys.stderr)
+    print(f"package: building the report PDF with {name} on its title page", file=sys.stderr)
     try:
-        res = subprocess.run(["bash", str(script), "pdf"], cwd=PROJECT_ROOT, env=env,
+        res = subprocess.run(["bash", str(script), "report"], cwd=PROJECT_ROOT, env=env,
                              capture_output=True, text=True)
         if res.returncode == 0 and pdf.is_file():
             return pdf
         last = ((res.stderr.strip() or res.stdout.strip()).splitlines() or ["no message"])[-1]
         if backup is None:
-            raise InputError(f"building the book PDF with your name failed ({last}); fix the "
-                             "book build or pass --pdf PATH.")
+            raise InputError(f"building the report PDF with your name failed ({last}); fix the "
+                             "report build or pass --pdf PATH.")
         pdf.parent.mkdir(parents=True, exist_ok=True)
         shutil.copyfile(backup, pdf)
-        print(f"package: note: building the PDF with your name failed ({last}); using the PDF "
-              "built before, without your name on its title page.", file=sys.stderr)
+        print(f"package: note: building the report with your name failed ({last}); using the "
+              "report built before, without your name on its title page.", file=sys.stderr)
         return pdf
     finally:
         if backup is not None:
@@ -366,8 +369,9 @@ def build_package(uniqname: str, pdf: str | Path | None = None, out: str | Path 
     uniqname : str
         UMich uniqname (1-8 lowercase letters or digits).
     pdf : path, optional
-        The written part; default: the book's PDF, rebuilt with ``uniqname`` on its title page
-        (:func:`build_named_pdf`), or ``_build/hw4_book.pdf`` in a checkout without the build script.
+        The written part; default: the report edition, built with ``uniqname`` on its title
+        page (:func:`build_named_pdf`), or ``_build/hw4_report.pdf`` in a checkout without the
+        build script.
     out : path
         Output folder (created when missing).
     force : bool
@@ -444,10 +448,11 @@ def register(subparsers) -> argparse.ArgumentParser:
         "package", help="make the homework submission NAME_hw4.tgz and NAME_hw4.pdf",
         description="Make the submission: NAME_hw4.tgz (directory NAME_hw4/ with the four "
                     "ogm_*.py files, runnable with the course's run.py and utils.py without "
-                    "this repository) and the book PDF as NAME_hw4.pdf.")
+                    "this repository) and the report PDF (the book's short edition, with your "
+                    "name) as NAME_hw4.pdf.")
     p.add_argument("--uniqname", required=True, help="your UMich uniqname (1-8 lowercase letters/digits)")
     p.add_argument("--pdf", default=None,
-                   help="PDF of the written part (default: the book's PDF, rebuilt with "
+                   help="PDF of the written part (default: the report edition, built with "
                         "your uniqname on its title page)")
     p.add_argument("--out", default=".", help="output folder (default: current folder)")
     p.add_argument("--video", action="append", default=None, metavar="PATH",

@@ -1,10 +1,13 @@
 #!/usr/bin/env bash
 # Build the book from the outputs stored in the notebooks (nothing is executed here), with
-# Sphinx warnings as errors: HTML into _build/html, PDF into _build/latex and _build/hw4_book.pdf.
+# Sphinx warnings as errors: HTML into _build/html, PDF into _build/latex and _build/hw4_book.pdf,
+# and the report edition (the student's short PDF, hw4/book/report.py and report/) into
+# _build/hw4_report.pdf.
 #
-#   bash scripts/build_book.sh          # HTML and PDF
+#   bash scripts/build_book.sh          # HTML, PDF and report
 #   bash scripts/build_book.sh html     # HTML only
 #   bash scripts/build_book.sh pdf      # PDF only
+#   bash scripts/build_book.sh report   # report only (HW4_BOOK_AUTHOR: the student's name)
 set -eo pipefail
 cd "$(dirname "${BASH_SOURCE[0]}")/.."
 if [ -z "$VIRTUAL_ENV" ] && [ -f .venv/bin/activate ]; then
@@ -34,6 +37,25 @@ if [ "$what" = all ] || [ "$what" = pdf ]; then
     fi
     cp _build/latex/hw4_book.pdf _build/hw4_book.pdf
     echo "book: PDF at _build/hw4_book.pdf"
+fi
+
+if [ "$what" = all ] || [ "$what" = report ]; then
+    if ! command -v xelatex >/dev/null 2>&1 || ! command -v latexmk >/dev/null 2>&1; then
+        echo "book: the report needs TeX Live (xelatex, latexmk): run 'bash scripts/setup.sh' as root, or see its message." >&2
+        exit 1
+    fi
+    echo "book: report"
+    rm -f _build/hw4_report.pdf
+    # the source folder _build/report_src: the chapters' glue cells and figures, report/taskN.md
+    python -m hw4.book.report ${HW4_BOOK_AUTHOR:+--name "$HW4_BOOK_AUTHOR"}
+    # the name is the report's author line already (not also the extension's extra line)
+    env -u HW4_BOOK_AUTHOR jupyter-book build _build/report_src --builder pdflatex -W -n --keep-going
+    if [ ! -s _build/report_src/_build/latex/hw4_report.pdf ]; then
+        echo "book: LaTeX finished without writing the report; see _build/report_src/_build/latex/hw4_report.log." >&2
+        exit 1
+    fi
+    cp _build/report_src/_build/latex/hw4_report.pdf _build/hw4_report.pdf
+    echo "book: report at _build/hw4_report.pdf"
 fi
 
 # The HTML links the whole book's PDF (book/_ext/templates/hw4-pdf-link.html) next to index.html.

@@ -29,9 +29,18 @@ Image descriptions
     An image without alt text gets its figure's caption (or a generic description), not its
     file path.
 
+Unnumbered chapters (``hw4_unnumbered`` in ``_config.yml``)
+    ``{docname: prefix}``: chapters outside the numbering, so that Task N is chapter N. Their
+    figures, tables and equations are numbered ``prefix.k`` in both editions (``B.8`` for the
+    background chapter's eighth equation); an empty prefix means they have none. In the HTML
+    the prefix is put into Sphinx's figure numbers; in the PDF the chapter is preceded by
+    ``\\hwunnumbered{prefix}`` (defined in the preamble), which makes the next ``\\chapter``
+    unnumbered and numbers its floats and equations ``prefix.k``.
+
 ``HW4_BOOK_AUTHOR``
     When this environment variable is set (``python -m hw4 package --uniqname NAME`` sets it),
-    the PDF title page shows its value above the configured author line.
+    the PDF title page names that student above the configured author line. Without it the title
+    page says that this is the course book (``hw4_course_author`` in ``_config.yml``).
 """
 from __future__ import annotations
 
@@ -150,13 +159,44 @@ def light_mode(app: Sphinx, config) -> None:
 
 
 def override_author(app: Sphinx, config) -> None:
-    """Put ``$HW4_BOOK_AUTHOR`` on the PDF's title page, above the configured author line."""
+    """The PDF title page's author line: ``$HW4_BOOK_AUTHOR`` (the student) above the configured
+    author line, or, without it, ``hw4_course_author`` (this is the course book, nobody's
+    submission) below it."""
     name = os.environ.get(AUTHOR_ENV, "").strip()
-    if not name:
+    if name:
+        line = texescape.escape(name, config.latex_engine)
+        join = lambda author: f"{line}\\\\{author}" if author else line  # noqa: E731
+    elif config.hw4_course_author:
+        line = texescape.escape(config.hw4_course_author, config.latex_engine)
+        join = lambda author: f"{author}\\\\{line}" if author else line  # noqa: E731
+    else:
         return
-    escaped = texescape.escape(name, config.latex_engine)
-    config.latex_documents = [(doc, target, title, f"{escaped}\\\\{author}" if author else escaped,
-                               *rest) for doc, target, title, author, *rest in config.latex_documents]
+    config.latex_documents = [(doc, target, title, join(author), *rest)
+                              for doc, target, title, author, *rest in config.latex_documents]
+
+
+def prefix_unnumbered(app: Sphinx, env) -> list[str]:
+    """HTML numbers of the unnumbered chapters' figures, tables and equations: ``prefix.k``.
+
+    Sphinx numbers the floats of a document outside every numbered toctree 1, 2, ...; with
+    several such documents the numbers would repeat. ``hw4_unnumbered`` gives each a prefix
+    (the PDF does the same with ``\\hwunnumbered``), so ``Eq. (B.8)`` reads the same in both."""
+    for docname, prefix in app.config.hw4_unnumbered.items():
+        if not prefix:
+            continue
+        for numbers in env.toc_fignumbers.get(docname, {}).values():
+            for key, number in numbers.items():
+                if number and number[0] != prefix:
+                    numbers[key] = (prefix, number[-1])
+    return []
+
+
+def mark_unnumbered(app: Sphinx, doctree: nodes.document) -> None:
+    """Put ``\\hwunnumbered{prefix}`` before an unnumbered chapter's heading (LaTeX only)."""
+    prefix = app.config.hw4_unnumbered.get(app.env.docname)
+    if prefix is None:
+        return
+    doctree.insert(0, nodes.raw("", f"\\hwunnumbered{{{prefix}}}\n", format="latex"))
 
 
 def setup(app: Sphinx) -> dict:
@@ -166,6 +206,11 @@ def setup(app: Sphinx) -> dict:
                  man=(visit_video_other, depart_video_other),
                  texinfo=(visit_video_other, depart_video_other))
     app.add_directive("video", VideoFigure)
+    app.add_config_value("hw4_unnumbered", {}, "env", types=[dict])
+    app.add_config_value("hw4_course_author", "", "env", types=[str])
+    app.connect("doctree-read", mark_unnumbered)
+    # after Sphinx's TocTreeCollector (priority 500) has assigned the figure numbers
+    app.connect("env-get-updated", prefix_unnumbered, priority=900)
     app.connect("builder-inited", check_mathjax)
     app.connect("doctree-resolved", describe_images)
     # after sphinx-external-toc has set root_doc, which the default latex_documents names

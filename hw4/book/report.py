@@ -1,0 +1,353 @@
+"""The report edition: a short PDF per student, built from the book's notebooks without editing them.
+
+``python -m hw4.book.report [--name NAME] [--out _build/report_src]`` writes a Jupyter Book source
+folder with one notebook per task (``task1.ipynb`` ... ``task5.ipynb``), a title page
+(``intro.md``), ``_config.yml`` and ``_toc.yml``; ``bash scripts/build_book.sh report`` then
+builds it into ``_build/hw4_report.pdf``. Each task notebook is made of
+
+1. the task chapter's cells that glue numbers (code cells whose stored outputs hold glue
+   records), hidden and with only those outputs, so that every ``{glue:text}`` of the report
+   prints the value the book prints, byte for byte;
+2. the report's own text, ``report/taskN.md`` (question and answer in a few sentences), in which
+   a line ``<!-- figure: NAME -->`` or ``<!-- table: NAME -->`` is replaced by the chapter's
+   figure cell (its stored image and caption, code removed) or table block of that name
+   (myst-nb ``mystnb.figure.name`` metadata, or a ``:name:`` option). ``<!-- figure: A or B C -->``
+   takes A when the chapter has it, else B and C; a name may end in ``*`` (every match, in
+   chapter order).
+
+A caption's reference to something the report does not hold is rewritten: an equation of the
+background chapter becomes "Eq. (B.k) of the course book" (the book's own number); any other
+missing target stops the build with one sentence. :data:`REQUIRED` lists the figures the
+handout asks for; :func:`missing_figures` checks a built report's LaTeX for their labels.
+"""
+from __future__ import annotations
+
+import argparse
+import copy
+import fnmatch
+import json
+import os
+import re
+import shutil
+import sys
+from pathlib import Path
+
+from ..core.errors import InputError
+
+ROOT = Path(__file__).resolve().parents[2]
+REPORT_DIR = ROOT / "report"
+TASKS = {1: "notebooks/T1_discrete_csm.ipynb", 2: "notebooks/T2_continuous_csm.ipynb",
+         3: "notebooks/T3_semantic_csm.ipynb", 4: "notebooks/T4_continuous_semantic_csm.ipynb",
+         5: "notebooks/T5_bki_3d.ipynb"}
+"""The chapter each task of the report takes its glue cells, figures and tables from."""
+
+REQUIRED = {
+    1: ["fig-t1-map", "fig-t1-var"],
+    2: ["fig-t2-map", "fig-t2-var", "fig-t2-res-027", "fig-t2-res-05"],
+    3: ["fig-t3-map", "fig-t3-var"],
+    4: ["fig-t4-map", "fig-t4-var", "fig-t4-res-027", "fig-t4-res-05"],
+    5: ["fig-t5-rviz-*"],
+}
+"""The figures the handout asks for, by task (its "visualize your map ... and its variance",
+"generate the map and the variance map using grid_size = [0.135, 0.270, 0.5]" of Tasks 2B and
+4B, whose 0.135 m maps are those of 2A / 4A, and Task 5's screenshots of the semantic map).
+Task 5's screenshots are the RViz figures ``fig-t5-rviz-*`` when the chapter has them; without
+them, :data:`T5_FALLBACK` (the chapter's renders of the same map) stand in, as the chapter says."""
+T5_FALLBACK = ["fig-t5-kitti-3d", "fig-t5-kitti-top"]
+VIDEO = "t5_kitti04_mapping.mp4"
+"""The Task 5 mapping video the submission holds (``hw4.package.VIDEOS``)."""
+
+MARK = re.compile(r"^<!--\s*(figure|table):\s*(.+?)\s*-->\s*$", re.M)
+REF = re.compile(r"\{(numref|ref|eq|doc)\}`([^`]*)`")
+GLUE_MIME = "application/papermill.record/"
+SRC = "_build/report_src"
+
+
+# --------------------------------------------------------------------------- reading the book
+
+def _load(path: Path) -> dict:
+    try:
+        return json.loads(path.read_text(encoding="utf-8"))
+    except (OSError, ValueError) as e:
+        raise InputError(f"cannot read the notebook {path} ({e}).") from None
+
+
+def _source(cell: dict) -> str:
+    src = cell.get("source", "")
+    return "".join(src) if isinstance(src, list) else src
+
+
+def figure_cells(nb: dict) -> dict[str, dict]:
+    """``{name: cell}`` of a notebook's figures: code cells with ``mystnb.figure.name`` and an
+    image output, and Markdown cells holding a ``{video}`` figure with ``:name:``."""
+    out = {}
+    for cell in nb["cells"]:
+        name = cell.get("metadata", {}).get("mystnb", {}).get("figure", {}).get("name")
+        if name and cell["cell_type"] == "code":
+            if any("image/png" in o.get("data", {}) for o in cell.get("outputs", [])):
+                out[name] = cell
+        elif cell["cell_type"] == "markdown":
+            for m in re.finditer(r"^```\{video\}[^\n]*\n(?::[^\n]*\n)*?:name: (\S+)", _source(cell), re.M):
+                out[m.group(1)] = cell
+    return out
+
+
+def _blocks(nb: dict, directive: str) -> dict[str, str]:
+    """``{name: text}`` of the fenced ``{directive}`` blocks (with ``:name:``) in Markdown cells."""
+    out = {}
+    pattern = re.compile(r"^```\{" + directive + r"\}.*?^```[ \t]*$", re.M | re.S)
+    for cell in nb["cells"]:
+        if cell["cell_type"] != "markdown":
+            continue
+        for m in pattern.finditer(_source(cell)):
+            name = re.search(r"^:name: (\S+)", m.group(0), re.M)
+            if name:
+                out[name.group(1)] = m.group(0)
+    return out
+
+
+def glue_cells(nb: dict) -> list[dict]:
+    """The notebook's cells that glue values, each reduced to its glue outputs and hidden."""
+    out = []
+    for cell in nb["cells"]:
+        if cell["cell_type"] != "code":
+            continue
+        glued = [o for o in cell.get("outputs", [])
+                 if any(k.startswith(GLUE_MIME) for k in o.get("data", {}))]
+        if glued:
+            new = {"cell_type": "code", "execution_count": None, "id": cell.get("id", ""),
+                   "metadata": {"tags": ["remove-cell"]}, "outputs": copy.deepcopy(glued),
+                   "source": _source(cell)}
+            out.append(new)
+    return out
+
+
+def background_equations(path: Path | None = None) -> dict[str, str]:
+    """``{label: "B.k"}``: the book's numbers of the background chapter's labelled equations."""
+    nb = _load(path or ROOT / "book" / "background.ipynb")
+    labels = []
+    for cell in nb["cells"]:
+        if cell["cell_type"] == "markdown":
+            labels += re.findall(r"^:label: (\S+)", _source(cell), re.M)
+            labels += re.findall(r"\$\$\s*\((eq-[\w-]+)\)", _source(cell))
+    return {label: f"B.{k}" for k, label in enumerate(dict.fromkeys(labels), start=1)}
+
+
+# --------------------------------------------------------------------------- writing the report
+
+def _pick(spec: str, available: list[str]) -> list[str]:
+    """Names a marker asks for: ``A or B C`` -> A's matches if any, else B's and C's."""
+    for option in spec.split(" or "):
+        names = []
+        for pattern in option.replace(",", " ").split():
+            names += [n for n in available if fnmatch.fnmatchcase(n, pattern) and n not in names]
+        if names:
+            return names
+    return []
+
+
+def _fix_refs(text: str, defined: set[str], equations: dict[str, str], where: str) -> str:
+    """Rewrite references to targets the report does not hold (see the module docstring)."""
+    def sub(m):
+        role, target = m.group(1), m.group(2)
+        label = re.sub(r"^.*<(.*)>$", r"\1", target)
+        if label in defined:
+            return m.group(0)
+        if role == "eq" and label in equations:
+            return f"Eq.\u00a0({equations[label]}) of the course book"
+        raise InputError(f"{where} refers to {label!r}, which the report does not hold: add it "
+                         "to the report or pick another figure.")
+    return REF.sub(sub, text)
+
+
+def required_figures(t5: dict | None = None) -> dict[int, list[str]]:
+    """:data:`REQUIRED` with Task 5's patterns resolved against the Task 5 chapter: its RViz
+    figures when it has any, else :data:`T5_FALLBACK`."""
+    t5 = t5 if t5 is not None else _load(ROOT / TASKS[5])
+    names = list(figure_cells(t5))
+    out = {task: list(figs) for task, figs in REQUIRED.items()}
+    rviz = _pick(" ".join(REQUIRED[5]), names)
+    out[5] = rviz or list(T5_FALLBACK)
+    return out
+
+
+def _plan(task: int, text: str, nb: dict) -> list[tuple[str, str]]:
+    """The report text of one task cut into ``("md", text)``, ``("figure", name)`` and
+    ``("table", name)`` pieces, the markers resolved against the chapter ``nb``."""
+    figures, tables = figure_cells(nb), _blocks(nb, "table")
+    parts = MARK.split(text)  # [text, kind, spec, text, kind, spec, ..., text]
+    pieces: list[tuple[str, object]] = [("md", parts[0])]
+    for i in range(1, len(parts), 3):
+        kind, spec, after = parts[i], parts[i + 1], parts[i + 2]
+        pool = list(figures) if kind == "figure" else list(tables)
+        names = _pick(spec, pool)
+        if not names:
+            raise InputError(f"report/task{task}.md asks for the {kind} {spec!r}, which "
+                             f"{TASKS[task]} does not have.")
+        for name in names:
+            pieces.append((kind, name))
+        pieces.append(("md", after))
+    return pieces
+
+
+def task_notebook(task: int, text: str, nb: dict, equations: dict[str, str],
+                  elsewhere: set[str] = frozenset()) -> tuple[dict, list]:
+    """The report's notebook for one task, and the figure names it holds.
+
+    ``elsewhere``: names the other tasks of the report hold (a caption may refer to them)."""
+    figures = figure_cells(nb)
+    tables = _blocks(nb, "table")
+    cells = glue_cells(nb)
+    placed: list[str] = []
+    pieces = _plan(task, text, nb)
+    defined = {n for k, n in pieces if k in ("figure", "table")} | set(elsewhere)
+    defined |= set(re.findall(r"^\(([\w-]+)\)=", text, re.M))
+    md: list[str] = []
+
+    def flush():
+        body = "".join(md).strip("\n")
+        md.clear()
+        if body:
+            cells.append({"cell_type": "markdown", "id": f"r{task}-{len(cells)}",
+                          "metadata": {}, "source": body})
+
+    for kind, item in pieces:
+        if kind == "md":
+            md.append(item)
+        elif kind == "table":
+            md.append("\n" + _fix_refs(tables[item], defined, equations,
+                                       f"table {item} of {TASKS[task]}") + "\n")
+        else:
+            cell = figures[item]
+            placed.append(item)
+            if cell["cell_type"] == "markdown":  # a {video} figure
+                block = re.search(r"^```\{video\}.*?^```[ \t]*$", _source(cell), re.M | re.S)
+                md.append("\n" + _fix_refs(block.group(0), defined, equations,
+                                           f"video {item} of {TASKS[task]}") + "\n")
+                continue
+            flush()
+            new = copy.deepcopy(cell)
+            # the code stays in the cell (myst-nb skips a code cell without source) but is
+            # removed from the report (tag remove-input)
+            new["outputs"] = [o for o in new.get("outputs", []) if "image/png" in o.get("data", {})]
+            meta = new["metadata"]
+            meta["tags"] = ["remove-input"]
+            fig = meta["mystnb"]["figure"]
+            fig["caption"] = _fix_refs(fig.get("caption", ""), defined, equations,
+                                       f"the caption of {item}")
+            cells.append(new)
+    flush()
+    out = {"cells": cells, "metadata": copy.deepcopy(nb.get("metadata", {})),
+           "nbformat": 4, "nbformat_minor": 5}
+    return out, placed
+
+
+def _config(name: str | None) -> str:
+    """The report's ``_config.yml``: the book's PDF settings with the report's title and author."""
+    import yaml
+
+    book = yaml.safe_load((ROOT / "_config.yml").read_text())
+    cfg = {
+        "title": "Mapping with Counting Sensor Models: homework report",
+        "author": name or "NA 568 Mobile Robotics, Homework 4",
+        "copyright": book.get("copyright", ""),
+        "only_build_toc_files": True,
+        "exclude_patterns": ["_build/*", "**/.ipynb_checkpoints/*"],
+        "execute": {"execute_notebooks": "off"},
+        "parse": book["parse"],
+        "latex": {"latex_engine": "xelatex", "use_jupyterbook_latex": True,
+                  "latex_documents": {"targetname": "hw4_report.tex"}},
+        "sphinx": {"local_extensions": {"hw4_book": str(ROOT / "book" / "_ext")},
+                   "config": {}},
+    }
+    keep = ("numfig", "numfig_format", "math_numfig", "math_eqref_format", "nb_merge_streams",
+            "mathjax3_config", "latex_elements", "jblatex_captions_to_parts")
+    sc = cfg["sphinx"]["config"]
+    for key in keep:
+        if key in book["sphinx"]["config"]:
+            sc[key] = copy.deepcopy(book["sphinx"]["config"][key])
+    # a report of about 15 pages: no contents page (five chapters), and a page of floats only
+    # once they fill three quarters of it (two half-page resolution figures share a page)
+    elements = sc.setdefault("latex_elements", {})
+    elements["tableofcontents"] = ""
+    elements["preamble"] = elements.get("preamble", "") + (
+        "\\makeatletter\\renewcommand{\\floatpagefraction}{0.75}\\makeatother\n")
+    sc["latex_additional_files"] = [str(ROOT / f) for f in
+                                    book["sphinx"]["config"].get("latex_additional_files", [])]
+    sc["hw4_course_author"] = "" if name else "Homework report (no student name given)"
+    sc["extensions"] = ["sphinx_togglebutton", "sphinx_copybutton", "myst_nb", "jupyter_book",
+                        "sphinx_comments", "sphinx_external_toc", "sphinx_design",
+                        "sphinx_book_theme", "hw4_book"]
+    return yaml.safe_dump(cfg, sort_keys=False, allow_unicode=True)
+
+
+def build_sources(out: str | Path = SRC, name: str | None = None, root: Path = ROOT,
+                  report_dir: Path | None = None) -> dict[int, list[str]]:
+    """Write the report's Jupyter Book source into ``out``; return the figures of each task.
+
+    Nothing is written when a marker or a caption's reference cannot be resolved
+    (:class:`InputError`, one sentence)."""
+    report_dir = Path(report_dir or root / "report")
+    out = Path(out)
+    equations = background_equations(root / "book" / "background.ipynb")
+    books, placed, texts, nbs = {}, {}, {}, {}
+    for task, rel in TASKS.items():
+        text_path = report_dir / f"task{task}.md"
+        if not text_path.is_file():
+            raise InputError(f"{text_path} is missing: the report has one text per task.")
+        nbs[task] = _load(root / rel)
+        texts[task] = text_path.read_text(encoding="utf-8").replace("{{video}}", VIDEO)
+    names = {n for t in TASKS for k, n in _plan(t, texts[t], nbs[t]) if k != "md"}
+    for task in TASKS:
+        books[task], placed[task] = task_notebook(task, texts[task], nbs[task], equations, names)
+    intro = (report_dir / "intro.md").read_text(encoding="utf-8")
+    who = name or "(no name given: `python -m hw4 package --uniqname NAME` names the student)"
+    intro = intro.replace("{{student}}", who).replace("{{video}}", VIDEO)
+    if out.exists():
+        shutil.rmtree(out)
+    out.mkdir(parents=True)
+    (out / "intro.md").write_text(intro, encoding="utf-8")
+    for task, nb in books.items():
+        (out / f"task{task}.ipynb").write_text(json.dumps(nb, indent=1, ensure_ascii=False) + "\n",
+                                               encoding="utf-8")
+    (out / "_toc.yml").write_text(
+        "format: jb-book\nroot: intro\nparts:\n  - numbered: true\n    chapters:\n"
+        + "".join(f"      - file: task{t}\n" for t in TASKS), encoding="utf-8")
+    (out / "_config.yml").write_text(_config(name), encoding="utf-8")
+    static = root / "notebooks" / "_static"  # the stills of {video} figures
+    if static.is_dir():
+        os.symlink(static, out / "_static", target_is_directory=True)
+    return placed
+
+
+def missing_figures(tex: str | Path, required: dict[int, list[str]] | None = None) -> list[str]:
+    """The required figures whose label is not in the report's LaTeX file ``tex``."""
+    text = Path(tex).read_text(encoding="utf-8")
+    labels = set(re.findall(r"\\label\{\\detokenize\{task\d:([\w-]+)\}\}", text))
+    required = required or required_figures()
+    return [n for figs in required.values() for n in figs if n not in labels]
+
+
+def main(argv=None) -> int:
+    p = argparse.ArgumentParser(prog="python -m hw4.book.report",
+                                description="Write the report edition's Jupyter Book source.")
+    p.add_argument("--name", default=None, help="the student's name for the title page")
+    p.add_argument("--out", default=str(ROOT / SRC), help=f"output folder (default: {SRC})")
+    args = p.parse_args(argv)
+    try:
+        placed = build_sources(args.out, args.name)
+    except InputError as e:
+        print(f"report: {e}", file=sys.stderr)
+        return 2
+    required = required_figures()
+    for task, figs in required.items():
+        gone = [f for f in figs if f not in placed[task]]
+        if gone:
+            print(f"report: warning: Task {task}'s required figure(s) {', '.join(gone)} are not "
+                  f"in report/task{task}.md.", file=sys.stderr)
+    print(f"report: source in {args.out}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

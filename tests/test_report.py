@@ -1,0 +1,115 @@
+"""The report edition (hw4/book/report.py): built from the book's notebooks, holding every figure
+the handout asks for, no code, and the book's glued numbers byte for byte."""
+from __future__ import annotations
+
+import json
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from hw4.book import report
+from hw4.core.errors import InputError
+
+
+@pytest.fixture(scope="module")
+def sources(tmp_path_factory):
+    out = tmp_path_factory.mktemp("report") / "src"
+    placed = report.build_sources(out, name="Jane Doe")
+    return out, placed
+
+
+def _nb(path):
+    return json.loads(Path(path).read_text(encoding="utf-8"))
+
+
+def test_every_required_figure_is_placed_with_its_image(sources):
+    out, placed = sources
+    required = report.required_figures()
+    for task, names in required.items():
+        nb = _nb(out / f"task{task}.ipynb")
+        figs = report.figure_cells(nb)
+        for name in names:
+            assert name in placed[task], f"Task {task}: {name} is not in report/task{task}.md"
+            assert name in figs, f"Task {task}: {name} has no image in the report"
+
+
+def test_no_code_is_shown(sources):
+    out, _ = sources
+    for task in report.TASKS:
+        for cell in _nb(out / f"task{task}.ipynb")["cells"]:
+            if cell["cell_type"] == "code":
+                tags = cell["metadata"].get("tags", [])
+                assert "remove-cell" in tags or "remove-input" in tags, cell["source"][:80]
+
+
+def test_glued_values_are_the_books_byte_for_byte(sources):
+    out, _ = sources
+
+    def records(nb):
+        got = {}
+        for cell in nb["cells"]:
+            for o in cell.get("outputs", []):
+                name = o.get("metadata", {}).get("scrapbook", {}).get("name")
+                if name:
+                    got[name] = json.dumps(o["data"], sort_keys=True)
+        return got
+
+    for task, rel in report.TASKS.items():
+        book = records(_nb(report.ROOT / rel))
+        rep = records(_nb(out / f"task{task}.ipynb"))
+        assert rep and rep == book
+
+
+def test_title_page_names_the_student(sources):
+    out, _ = sources
+    assert "Jane Doe" in (out / "intro.md").read_text()
+    assert "Jane Doe" in (out / "_config.yml").read_text()
+
+
+def test_unknown_figure_or_caption_reference_stops_the_build(tmp_path):
+    texts = tmp_path / "texts"
+    shutil.copytree(report.REPORT_DIR, texts)
+    (texts / "task1.md").write_text("# Task 1\n\n<!-- figure: fig-t1-nowhere -->\n")
+    with pytest.raises(InputError, match="fig-t1-nowhere"):
+        report.build_sources(tmp_path / "src", report_dir=texts)
+    assert not (tmp_path / "src").exists()
+    # Fig. t2-var's caption refers to Fig. t1-var: without Task 1's figure it cannot resolve
+    (texts / "task1.md").write_text("# Task 1\n")
+    with pytest.raises(InputError, match="fig-t1-var"):
+        report.build_sources(tmp_path / "src", report_dir=texts)
+
+
+def test_background_equations_get_the_books_numbers():
+    eqs = report.background_equations()
+    assert list(eqs.values())[:3] == ["B.1", "B.2", "B.3"]
+    text = report._fix_refs("mean of {eq}`eq-beta-moments`", set(), eqs, "x")
+    assert text == f"mean of Eq.\u00a0({eqs['eq-beta-moments']}) of the course book"
+
+
+def test_task5_requires_rviz_figures_when_the_chapter_has_them(tmp_path):
+    t5 = {"cells": [{"cell_type": "code", "metadata": {"mystnb": {"figure": {"name": n}}},
+                     "outputs": [{"data": {"image/png": ""}}], "source": ""}
+                    for n in ("fig-t5-rviz-bki", "fig-t5-kitti-3d")]}
+    assert report.required_figures(t5)[5] == ["fig-t5-rviz-bki"]
+    t5["cells"].pop(0)
+    assert report.required_figures(t5)[5] == report.T5_FALLBACK
+    tex = tmp_path / "r.tex"
+    tex.write_text(r"\label{\detokenize{task5:fig-t5-kitti-3d}}")
+    assert report.missing_figures(tex, {5: ["fig-t5-kitti-3d", "fig-t5-rviz-bki"]}) == [
+        "fig-t5-rviz-bki"]
+
+
+def test_report_builds_with_every_required_figure_labelled(sources):
+    """The LaTeX build (warnings as errors) of the report; its labels checked against the list."""
+    out, _ = sources
+    jb = Path(sys.executable).with_name("jupyter-book")
+    res = subprocess.run([str(jb), "build", str(out), "--builder", "latex", "-W", "-n",
+                          "--keep-going"], capture_output=True, text=True)
+    assert res.returncode == 0, res.stdout[-3000:] + res.stderr[-3000:]
+    tex = out / "_build" / "latex" / "hw4_report.tex"
+    assert report.missing_figures(tex) == []
+    text = tex.read_text()
+    assert "sphinxVerbatimInput" not in text  # no code cell input
