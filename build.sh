@@ -12,4 +12,4 @@ for task in 1 2 3 4; do
     python -m hw4 run --task "$task" --out out/maps --force
 done
 bash scripts/build_book.sh all
-echo "build: maps in out/maps, book in _build/html/index.html and _build/hw4_book.pdf"
+echo "build: maps in out/maps, book in _build/html/index.html and _build/hw4_book.pdf, report in _build/hw4_report.pdf"

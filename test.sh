@@ -41,7 +41,7 @@ MPLBACKEND=module://matplotlib_inline.backend_inline run_pytest "${notebooks[@]}
     --nbval --nbval-current-env --nbval-sanitize-with tests/nbval_sanitize.cfg \
     --nbval-cell-timeout 600
 
-stage "book (HTML and PDF, Sphinx warnings as errors)"
+stage "book (HTML, PDF and the report edition, Sphinx warnings as errors)"
 bash scripts/build_book.sh all
 
 stage "browser (every HTML page in headless Chromium, no network: maths, drawers at 420 px, images, videos, console)"
