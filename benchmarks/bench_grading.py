@@ -1,0 +1,63 @@
+"""Grading time: the exact core's reference maps vs a submission's template-style loops.
+
+    python benchmarks/bench_grading.py [SUBMISSION ...] [--grid-size G]
+
+For each grid size (default the configuration's, 0.5 m) it times, side by side, (a) what the
+grader computes itself for all four tasks (the exact core's reference maps for every legitimate
+variant, the end-point readings included) and (b) the full grading of each submission (default:
+the template-style loop submission ``tests/grading_fixtures/exact``), with each task's time in
+the sandbox, and prints the ratio and whether the total fits Gradescope's 10 minutes.
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import tempfile
+import time
+from pathlib import Path
+
+from hw4.grading import reference
+from hw4.grading.config import load
+from hw4.grading.grade import grade
+
+ROOT = Path(__file__).resolve().parents[1]
+GRADESCOPE_LIMIT = 600.0  # s, Gradescope's default
+
+
+def core_seconds(g: float) -> float:
+    reference._cache.clear()
+    t = time.perf_counter()
+    for task in (1, 2, 3, 4):
+        for _, opts in reference.variants(task, g):
+            reference.evidence(task, g, **opts)
+            if reference.model_class(task).continuous:
+                reference.evidence(task, g, end_sample=True, **opts)
+    return time.perf_counter() - t
+
+
+def main() -> None:
+    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    p.add_argument("submissions", nargs="*", type=Path,
+                   default=[ROOT / "tests" / "grading_fixtures" / "exact"])
+    p.add_argument("--grid-size", type=float, action="append")
+    a = p.parse_args()
+    sizes = a.grid_size or load()["grid_sizes"]
+    for g in sizes:
+        reference.evidence(1, g)  # data loaded once, outside the timings
+        core = core_seconds(g)
+        print(f"grid {g:g} m: exact core, all reference maps and variants of tasks 1-4: {core:.2f} s")
+        for sub in a.submissions:
+            with tempfile.TemporaryDirectory() as out:
+                t = time.perf_counter()
+                res = grade(sub, Path(out), grid_sizes=[g], figures=False)
+                total = time.perf_counter() - t
+                per = json.loads((Path(out) / "results.json").read_text())
+            tasks = "  ".join(f"T{i + 1} {x['score']:g}/{x['max_score']:g}"
+                              for i, x in enumerate(per["tests"]))
+            print(f"  {sub.name}: graded in {total:.1f} s ({total / core:.0f}x the core; "
+                  f"{'within' if total < GRADESCOPE_LIMIT else 'OVER'} Gradescope's "
+                  f"{GRADESCOPE_LIMIT:.0f} s); score {res['score']:g}: {tasks}")
+
+
+if __name__ == "__main__":
+    main()
