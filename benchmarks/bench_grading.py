@@ -31,7 +31,8 @@ def core_seconds(g: float) -> float:
         for _, opts in reference.variants(task, g):
             reference.evidence(task, g, **opts)
             if reference.model_class(task).continuous:
-                reference.evidence(task, g, end_sample=True, **opts)
+                for kind in reference.END_READINGS:
+                    reference.evidence(task, g, sample_count=kind, **opts)
     return time.perf_counter() - t
 
 

@@ -6,9 +6,10 @@ reference arrays never exist where a submission could read them.
 Variants (continuous tasks; each is a documented reading of the handout): free samples every
 0.1 m (= l/2, the default), every 2l/3, every grid size, or only the sample closest to the cell
 (a later template's hint). Whether a sample falls on the end point depends on the last bit of
-the range (``np.arange(0, z, step)`` on a recomputed ``z``), so for each step a cell agrees when
-it matches the reference with samples strictly short of the end point OR the one that also
-samples the end point. The posterior uses the submission's own prior (its ``prior_alpha`` or
+the range (``np.arange(0, z, step)``, perhaps on a range recomputed from the end point's world
+coordinates), so for each step a cell agrees when it matches the reference with samples strictly
+short of the end point OR one of the readings that may also sample it (``sample_count`` of
+:func:`hw4.core.evidence.count_evidence`). The posterior uses the submission's own prior (its ``prior_alpha`` or
 ``prior`` attribute, the prior its unobserved cells imply, or the template's 1e-3): priors from
 1e-19 to 0.5 are all legitimate.
 """
@@ -24,6 +25,7 @@ from ..core.posterior import beta_mean_variance, dirichlet_mean_variance
 from ..tasks import load_task_data, model_class
 
 L = 0.2
+END_READINGS = ("through", "arange", "arange_world")  # per cell, besides 'strict'
 
 
 def variants(task: int, grid_size: float) -> list[tuple[str, dict]]:
@@ -107,14 +109,14 @@ def student_arrays(mean, variance, n_cells: int, semantic: bool, n_classes: int 
 
 def compare(mean, var, counts, prior: float, semantic: bool, rtol: float, atol: float,
             alt_counts=None) -> Comparison:
-    """Cell-by-cell agreement of (mean, var) with the reference of ``counts`` (or, per cell, of
-    ``alt_counts``: the end-point reading)."""
+    """Cell-by-cell agreement of (mean, var) with the reference of ``counts`` (or, per cell, with
+    any of ``alt_counts``: the other readings of the end point)."""
     agree, ref_val, ref_var = _agree(mean, var, counts, prior, semantic, rtol, atol)
     observed = counts.sum(axis=1) > 0
-    if alt_counts is not None:
-        agree2, _, _ = _agree(mean, var, alt_counts, prior, semantic, rtol, atol)
+    for alt in alt_counts or ():
+        agree2, _, _ = _agree(mean, var, alt, prior, semantic, rtol, atol)
         agree = agree | agree2
-        observed |= alt_counts.sum(axis=1) > 0
+        observed |= alt.sum(axis=1) > 0
     considered = observed | ~agree
     n = int(considered.sum())
     share = float(agree[considered].mean()) if n else 1.0
@@ -158,7 +160,7 @@ def best_match(task: int, grid_size: float, mean, var, priors, rtol: float, atol
         _, counts = evidence(task, grid_size, **opts)
         alt = None
         if model_class(task).continuous:
-            _, alt = evidence(task, grid_size, **opts, end_sample=True)
+            alt = [evidence(task, grid_size, **opts, sample_count=k)[1] for k in END_READINGS]
         cand = list(priors)
         ip = implied_prior(var, counts, semantic)
         if ip is not None:
