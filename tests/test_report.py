@@ -85,8 +85,10 @@ def test_unknown_figure_or_caption_reference_stops_the_build(tmp_path):
 def test_background_equations_get_the_books_numbers():
     eqs = report.background_equations()
     assert list(eqs.values())[:3] == ["B.1", "B.2", "B.3"]
-    text = report._fix_refs("mean of {eq}`eq-beta-moments`", set(), eqs, "x")
-    assert text == f"mean of Eq.\u00a0({eqs['eq-beta-moments']}) of the course book"
+    text = report._fix_refs("the mean of {eq}`eq-beta-moments`, white", set(), eqs, "x")
+    assert text == f"the mean (course book, Eq.\u00a0{eqs['eq-beta-moments']}), white"
+    kept = "as {numref}`fig-t1-var` shows"
+    assert report._fix_refs(kept, {"fig-t1-var"}, eqs, "x") == kept
 
 
 def test_task5_requires_rviz_figures_when_the_chapter_has_them(tmp_path):

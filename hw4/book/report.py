@@ -13,10 +13,10 @@ builds it into ``_build/hw4_report.pdf``. Each task notebook is made of
    figure cell (its stored image and caption, code removed) or table block of that name
    (myst-nb ``mystnb.figure.name`` metadata, or a ``:name:`` option). ``<!-- figure: A or B C -->``
    takes A when the chapter has it, else B and C; a name may end in ``*`` (every match, in
-   chapter order).
+   chapter order); ``<!-- figure: NAME width=85% -->`` prints it at that share of the text width.
 
 A caption's reference to something the report does not hold is rewritten: an equation of the
-background chapter becomes "Eq. (B.k) of the course book" (the book's own number); any other
+background chapter becomes "(course book, Eq. B.k)" (the book's own number); any other
 missing target stops the build with one sentence. :data:`REQUIRED` lists the figures the
 handout asks for; :func:`missing_figures` checks a built report's LaTeX for their labels.
 """
@@ -58,7 +58,7 @@ VIDEO = "t5_kitti04_mapping.mp4"
 """The Task 5 mapping video the submission holds (``hw4.package.VIDEOS``)."""
 
 MARK = re.compile(r"^<!--\s*(figure|table):\s*(.+?)\s*-->\s*$", re.M)
-REF = re.compile(r"\{(numref|ref|eq|doc)\}`([^`]*)`")
+REF = re.compile(r"(?:\bof )?\{(numref|ref|eq|doc)\}`([^`]*)`")
 GLUE_MIME = "application/papermill.record/"
 SRC = "_build/report_src"
 
@@ -153,8 +153,8 @@ def _fix_refs(text: str, defined: set[str], equations: dict[str, str], where: st
         label = re.sub(r"^.*<(.*)>$", r"\1", target)
         if label in defined:
             return m.group(0)
-        if role == "eq" and label in equations:
-            return f"Eq.\u00a0({equations[label]}) of the course book"
+        if role == "eq" and label in equations:  # "E of {eq}`x`" -> "E (course book, Eq. B.8)"
+            return f"(course book, Eq.\u00a0{equations[label]})"
         raise InputError(f"{where} refers to {label!r}, which the report does not hold: add it "
                          "to the report or pick another figure.")
     return REF.sub(sub, text)
@@ -180,12 +180,15 @@ def _plan(task: int, text: str, nb: dict) -> list[tuple[str, str]]:
     for i in range(1, len(parts), 3):
         kind, spec, after = parts[i], parts[i + 1], parts[i + 2]
         pool = list(figures) if kind == "figure" else list(tables)
+        width = re.search(r"\s+width=(\d+%)$", spec)
+        if width:
+            spec = spec[:width.start()]
         names = _pick(spec, pool)
         if not names:
             raise InputError(f"report/task{task}.md asks for the {kind} {spec!r}, which "
                              f"{TASKS[task]} does not have.")
         for name in names:
-            pieces.append((kind, name))
+            pieces.append((kind, name) if not width else (kind, f"{name} {width.group(1)}"))
         pieces.append(("md", after))
     return pieces
 
@@ -200,7 +203,7 @@ def task_notebook(task: int, text: str, nb: dict, equations: dict[str, str],
     cells = glue_cells(nb)
     placed: list[str] = []
     pieces = _plan(task, text, nb)
-    defined = {n for k, n in pieces if k in ("figure", "table")} | set(elsewhere)
+    defined = {n.split()[0] for k, n in pieces if k in ("figure", "table")} | set(elsewhere)
     defined |= set(re.findall(r"^\(([\w-]+)\)=", text, re.M))
     md: list[str] = []
 
@@ -214,7 +217,9 @@ def task_notebook(task: int, text: str, nb: dict, equations: dict[str, str],
     for kind, item in pieces:
         if kind == "md":
             md.append(item)
-        elif kind == "table":
+            continue
+        item, *width = item.split()
+        if kind == "table":
             md.append("\n" + _fix_refs(tables[item], defined, equations,
                                        f"table {item} of {TASKS[task]}") + "\n")
         else:
@@ -235,6 +240,8 @@ def task_notebook(task: int, text: str, nb: dict, equations: dict[str, str],
             fig = meta["mystnb"]["figure"]
             fig["caption"] = _fix_refs(fig.get("caption", ""), defined, equations,
                                        f"the caption of {item}")
+            if width:  # printed narrower than the book prints it (mystnb image options)
+                meta["mystnb"]["image"] = {"width": width[0]}
             cells.append(new)
     flush()
     out = {"cells": cells, "metadata": copy.deepcopy(nb.get("metadata", {})),
@@ -266,12 +273,11 @@ def _config(name: str | None) -> str:
     for key in keep:
         if key in book["sphinx"]["config"]:
             sc[key] = copy.deepcopy(book["sphinx"]["config"][key])
-    # a report of about 15 pages: no contents page (five chapters), and a page of floats only
-    # once they fill three quarters of it (two half-page resolution figures share a page)
+    # a report of about 15 pages: no contents page (five chapters)
     elements = sc.setdefault("latex_elements", {})
     elements["tableofcontents"] = ""
-    elements["preamble"] = elements.get("preamble", "") + (
-        "\\makeatletter\\renewcommand{\\floatpagefraction}{0.75}\\makeatother\n")
+    # figures where the text puts them, each followed by its answer (a report is read in order)
+    elements["figure_align"] = "H"
     sc["latex_additional_files"] = [str(ROOT / f) for f in
                                     book["sphinx"]["config"].get("latex_additional_files", [])]
     sc["hw4_course_author"] = "" if name else "Homework report (no student name given)"
@@ -297,7 +303,7 @@ def build_sources(out: str | Path = SRC, name: str | None = None, root: Path = R
             raise InputError(f"{text_path} is missing: the report has one text per task.")
         nbs[task] = _load(root / rel)
         texts[task] = text_path.read_text(encoding="utf-8").replace("{{video}}", VIDEO)
-    names = {n for t in TASKS for k, n in _plan(t, texts[t], nbs[t]) if k != "md"}
+    names = {n.split()[0] for t in TASKS for k, n in _plan(t, texts[t], nbs[t]) if k != "md"}
     for task in TASKS:
         books[task], placed[task] = task_notebook(task, texts[task], nbs[task], equations, names)
     intro = (report_dir / "intro.md").read_text(encoding="utf-8")
