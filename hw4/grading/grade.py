@@ -171,6 +171,7 @@ def grade(submission: Path, out: Path, *, config: Path | None = None, grid_sizes
                 tests.append(test)
     finally:
         shutil.rmtree(base, ignore_errors=True)
+    iso = list(dict.fromkeys(n for t in tests for n in t.get("_isolation", ())))
     total = round(sum(t["score"] for t in tests), 4)
     max_total = round(sum(t["max_score"] for t in tests), 4)
     results = {
@@ -179,10 +180,10 @@ def grade(submission: Path, out: Path, *, config: Path | None = None, grid_sizes
         "output": _summary(total, max_total, sizes, notes),
         "output_format": "md",
         "tests": [{k: v for k, v in t.items() if not k.startswith("_")} for t in tests],
-        "extra_data": {"grid_sizes": sizes, "hw4_grader": 1},
+        "extra_data": {"grid_sizes": sizes, "hw4_grader": 1, "sandbox_limits": iso},
     }
     from .report import write_report
-    write_report(out, results, tests, notes, sizes, cfg)
+    write_report(out, results, tests, notes, sizes, cfg, iso)
     tmp = out / ".results.json.tmp"
     tmp.write_text(json.dumps(results, indent=1))
     tmp.replace(out / "results.json")
@@ -221,6 +222,7 @@ def _grade_one(task, g, cfg, found, box_maker, slot, hide, timeout, memory, pts,
     box = box_maker.fresh(task)
     res = _run_task(box, task, g, cfg, slot, hide, timeout, memory)
     test["_seconds"] = round(res.seconds, 1)
+    test["_isolation"] = res.notes
     logs = ""
     if res.stdout.strip():
         logs += f"\n\nstdout (capped):\n```\n{res.stdout.strip()[-2000:]}\n```"

@@ -14,12 +14,16 @@ BUDGET = ("Maps are graded at {sizes} so that a solution as slow as the course t
           "each have their own reference: the best one counts.")
 
 
-def write_report(out: Path, results: dict, tests: list, notes: list, sizes: list, cfg: dict) -> Path:
-    """Write ``out/report.md``; return its path."""
+def write_report(out: Path, results: dict, tests: list, notes: list, sizes: list, cfg: dict,
+                 isolation: list = ()) -> Path:
+    """Write ``out/report.md``; return its path. ``isolation``: what the sandbox could not do
+    on the grading machine (for the TA)."""
     lines = ["# HW4 mapping: autograder report", "", results["output"], ""]
     lines.append(BUDGET.format(sizes=", ".join(f"{g:g} m" for g in sizes), timeout=cfg["timeout"],
                                memory=cfg["memory"], rtol=cfg["rtol"], atol=cfg["atol"],
                                lo=cfg["zero_credit_share"], hi=cfg["full_credit_share"]))
+    if isolation:
+        lines += ["", "Sandbox on this machine: " + "; ".join(isolation) + "."]
     lines += ["", "| test | points | time |", "|---|---|---|"]
     for t in tests:
         secs = t.get("_seconds")
