@@ -102,3 +102,74 @@ def test_map_and_variance_draws_both_panels_on_the_given_scale():
         assert axes[0].get_xlim() == book.WINDOWS["building"][0]
         assert axes[1].get_ylim() == book.WINDOWS["building"][1]
         plt.close(fig)
+
+
+# --------------------------------------------------------------------------- the book's machinery
+
+def _ext():
+    import importlib.util
+    from pathlib import Path
+    path = Path(__file__).resolve().parents[1] / "book" / "_ext" / "hw4_book.py"
+    spec = importlib.util.spec_from_file_location("hw4_book_ext", path)
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    return mod
+
+
+def test_task_n_is_chapter_n():
+    """Numbered chapters in _toc.yml are the five tasks (T5_beyond a section of Task 5) and the
+    beyond chapter, in order; the background is in an unnumbered part, with a prefix for its
+    equations and figures in _config.yml."""
+    from pathlib import Path
+    import yaml
+    root = Path(__file__).resolve().parents[1]
+    toc = yaml.safe_load((root / "_toc.yml").read_text())
+    numbered = [c["file"] for part in toc["parts"] if part.get("numbered")
+                for c in part["chapters"]]
+    assert numbered == ["notebooks/T1_discrete_csm", "notebooks/T2_continuous_csm",
+                        "notebooks/T3_semantic_csm", "notebooks/T4_continuous_semantic_csm",
+                        "notebooks/T5_bki_3d", "notebooks/T6_evaluation_studies"]
+    config = yaml.safe_load((root / "_config.yml").read_text())["sphinx"]["config"]
+    unnumbered = [c["file"] for part in toc["parts"] if not part.get("numbered")
+                  for c in part["chapters"]]
+    assert set(unnumbered) == set(config["hw4_unnumbered"])
+    assert config["hw4_unnumbered"]["book/background"] == "B"
+
+
+def test_unnumbered_chapters_get_their_prefix_once():
+    from types import SimpleNamespace
+    ext = _ext()
+    env = SimpleNamespace(toc_fignumbers={
+        "book/background": {"figure": {"f1": (1,), "f2": (2,)}, "displaymath": {"e": (8,)}},
+        "notebooks/T1": {"figure": {"g": (1, 1)}}})
+    app = SimpleNamespace(config=SimpleNamespace(hw4_unnumbered={"book/background": "B",
+                                                                 "book/references": ""}))
+    for _ in range(2):  # a second call (an incremental build) changes nothing
+        ext.prefix_unnumbered(app, env)
+    assert env.toc_fignumbers["book/background"] == {
+        "figure": {"f1": ("B", 1), "f2": ("B", 2)}, "displaymath": {"e": ("B", 8)}}
+    assert env.toc_fignumbers["notebooks/T1"] == {"figure": {"g": (1, 1)}}
+
+
+def test_superscripts_print_in_the_pdf():
+    from sphinx.util import texescape
+    _ext().superscripts_as_math(None)
+    assert texescape.escape("10⁻⁶", "xelatex") == r"10\ensuremath{^{-}}\ensuremath{^{6}}"
+
+
+def test_title_page_says_whose_book_it_is(monkeypatch):
+    from types import SimpleNamespace
+    ext = _ext()
+
+    def author(name):
+        if name:
+            monkeypatch.setenv(ext.AUTHOR_ENV, name)
+        else:
+            monkeypatch.delenv(ext.AUTHOR_ENV, raising=False)
+        config = SimpleNamespace(latex_engine="xelatex", hw4_course_author="The course book",
+                                 latex_documents=[("intro", "b.tex", "T", "NA 568", "manual")])
+        ext.override_author(None, config)
+        return config.latex_documents[0][3]
+
+    assert author(None) == r"NA 568\\The course book"
+    assert author("Jane Doe") == r"Jane Doe\\NA 568"

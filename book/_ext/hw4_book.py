@@ -199,6 +199,20 @@ def mark_unnumbered(app: Sphinx, doctree: nodes.document) -> None:
     doctree.insert(0, nodes.raw("", f"\\hwunnumbered{{{prefix}}}\n", format="latex"))
 
 
+SUPERSCRIPTS = dict(zip("⁰¹²³⁴⁵⁶⁷⁸⁹⁻⁺", "0123456789-+"))
+"""Unicode superscripts in prose and captions (``10⁻⁶``): TeX Gyre Termes has only ¹²³."""
+
+
+def superscripts_as_math(app: Sphinx) -> None:
+    """Typeset Unicode superscript digits and signs as math superscripts in the PDF (the text
+    font lacks most of them, and XeLaTeX would drop them with a "Missing character" warning)."""
+    from sphinx.util import texescape as tex
+
+    for char, plain in SUPERSCRIPTS.items():
+        tex._tex_escape_map_without_unicode[ord(char)] = f"\\ensuremath{{^{{{plain}}}}}"
+        tex._tex_escape_map[ord(char)] = f"\\ensuremath{{^{{{plain}}}}}"
+
+
 def setup(app: Sphinx) -> dict:
     app.add_node(video, html=(visit_video_html, None),
                  latex=(visit_video_other, depart_video_other),
@@ -212,6 +226,7 @@ def setup(app: Sphinx) -> dict:
     # after Sphinx's TocTreeCollector (priority 500) has assigned the figure numbers
     app.connect("env-get-updated", prefix_unnumbered, priority=900)
     app.connect("builder-inited", check_mathjax)
+    app.connect("builder-inited", superscripts_as_math)
     app.connect("doctree-resolved", describe_images)
     # after sphinx-external-toc has set root_doc, which the default latex_documents names
     app.connect("config-inited", override_author, priority=900)
