@@ -80,7 +80,8 @@ def test_broken_variants_lose_only_their_task(tmp_path):
     res = grade(_sub(tmp_path, "broken", "broken"), tmp_path / "out", grid_sizes=G)
     _valid(res)
     t = _tests(res)
-    assert all(t[n]["score"] <= 0.2 * t[n]["max_score"] for n in t), res
+    # at most the variance share (25 %) is left, where a swap or a shift keeps the variances
+    assert all(t[n]["score"] <= 0.25 * t[n]["max_score"] + 1e-9 for n in t), res
     assert "alpha and beta are swapped" in t[1]["output"]
     assert "free space is never updated" in t[2]["output"]
     assert "label k is stored as k+1" in t[3]["output"]

@@ -69,6 +69,10 @@ def _print_results(results: dict, out: Path) -> None:
         print(f"{t['name']}: {t['score']:g} / {t['max_score']:g}  {first}")
     total = sum(t["max_score"] for t in results["tests"])
     print(f"score {results['score']:g} / {total:g}; report: {out / 'report.md'}")
+    if results.get("extra_data", {}).get("grader_error"):
+        import sys
+        print("warning: the grader itself failed on some task (see the report): regrade after "
+              "fixing the grading machine", file=sys.stderr)
 
 
 def run_grade(args) -> int:

@@ -105,11 +105,6 @@ def _run_task(box: Path, task: int, g: float, cfg: dict, slot: int, hide: tuple,
     return sandbox.run(argv, box, limits, user=user, hide=hide, writable=("sub", "out"))
 
 
-def _score(share: float, cfg: dict) -> float:
-    lo, hi = cfg["zero_credit_share"], cfg["full_credit_share"]
-    return float(np.clip((share - lo) / (hi - lo), 0.0, 1.0))
-
-
 def grade(submission: Path, out: Path, *, config: Path | None = None, grid_sizes=None,
           timeout=None, memory=None, visible_only: bool = False, slot: int = 0,
           figures: bool = True, hide: tuple = ()) -> dict:
@@ -180,7 +175,8 @@ def grade(submission: Path, out: Path, *, config: Path | None = None, grid_sizes
         "output": _summary(total, max_total, sizes, notes),
         "output_format": "md",
         "tests": [{k: v for k, v in t.items() if not k.startswith("_")} for t in tests],
-        "extra_data": {"grid_sizes": sizes, "hw4_grader": 1, "sandbox_limits": iso},
+        "extra_data": {"grid_sizes": sizes, "hw4_grader": 1, "sandbox_limits": iso,
+                       "grader_error": any(t.get("_grader_error") for t in tests)},
     }
     from .report import write_report
     write_report(out, results, tests, notes, sizes, cfg, iso)
@@ -235,6 +231,10 @@ def _grade_one(task, g, cfg, found, box_maker, slot, hide, timeout, memory, pts,
                   "(a loop that never ends, or a solution far slower than the template)")
     elif err.is_file():
         reason = err.read_text(errors="replace")[:600].strip()
+        if reason.startswith("grader setup:"):  # written by the wrapper before any student code
+            test["_grader_error"] = True
+            reason = ("the GRADER could not run this task, not the submission's fault (ask the "
+                      "course staff to regrade): " + reason.split(":", 1)[1].strip())
     elif res.returncode != 0:
         sig = -res.returncode if res.returncode and res.returncode < 0 else None
         why = {9: "killed (CPU time or memory limit)", 24: "CPU time limit exceeded",
@@ -261,11 +261,15 @@ def _grade_one(task, g, cfg, found, box_maker, slot, hide, timeout, memory, pts,
         test["_reason"] = reason.splitlines()[0][:200]
         return test
     best = reference.best_match(task, g, mean, var, _prior_candidates(meta), cfg["rtol"], cfg["atol"])
-    frac = _score(best.share, cfg)
+    frac = reference.credit(best, cfg["mean_weight"], cfg["zero_credit_share"],
+                            cfg["full_credit_share"])
     test["score"] = round(pts * frac, 4)
     test["status"] = "passed" if frac == 1.0 else "failed"
+    what = "most likely class" if semantic else "mean"
     lines = [f"{best.share:.1%} of the {best.compared:,} compared cells agree with the exact "
-             f"reference ({best.label}, prior {best.prior:.3g}): {test['score']:g} / {pts:g} points."]
+             f"reference ({best.label}, prior {best.prior:.3g}); the {what} agrees in "
+             f"{best.mean_share:.1%}, the variance in {best.var_share:.1%}: "
+             f"{test['score']:g} / {pts:g} points."]
     if best.share < 1.0:
         diag = reference.diagnose(task, g, mean, var, best.prior, cfg["rtol"], cfg["atol"])
         if diag:

@@ -76,13 +76,23 @@ def posterior(counts: np.ndarray, prior: float, semantic: bool) -> tuple[np.ndar
 @dataclass
 class Comparison:
     """Agreement of a submission's map with one reference."""
-    share: float                 # share of compared cells that agree, in [0, 1]
+    share: float                 # share of compared cells where mean and variance both agree
     compared: int                # cells compared (observed by the reference, or differing)
-    agree: np.ndarray = field(repr=False)   # (n,) bool
+    agree: np.ndarray = field(repr=False)   # (n,) bool, mean and variance agree
     ref_value: np.ndarray = field(repr=False)  # (n,) what the reference says (mean or class)
     ref_var: np.ndarray = field(repr=False)
     label: str = ""
     prior: float = 0.0
+    mean_share: float = 0.0      # share of compared cells whose mean (class) agrees
+    var_share: float = 0.0       # share of compared cells whose variance agrees
+
+
+def credit(c: Comparison, mean_weight: float, lo: float, hi: float) -> float:
+    """Fraction of a task's points: ``mean_weight`` for the means (semantic: the most likely
+    classes), the rest for the variances, each growing linearly from share ``lo`` to ``hi``."""
+    def f(x):
+        return float(np.clip((x - lo) / (hi - lo), 0.0, 1.0))
+    return mean_weight * f(c.mean_share) + (1 - mean_weight) * f(c.var_share)
 
 
 def student_arrays(mean, variance, n_cells: int, semantic: bool, n_classes: int = 7):
@@ -111,19 +121,27 @@ def compare(mean, var, counts, prior: float, semantic: bool, rtol: float, atol: 
             alt_counts=None) -> Comparison:
     """Cell-by-cell agreement of (mean, var) with the reference of ``counts`` (or, per cell, with
     any of ``alt_counts``: the other readings of the end point)."""
-    agree, ref_val, ref_var = _agree(mean, var, counts, prior, semantic, rtol, atol)
+    mean_ok, var_ok, ref_val, ref_var = _agree(mean, var, counts, prior, semantic, rtol, atol)
+    agree = mean_ok & var_ok
     observed = counts.sum(axis=1) > 0
     for alt in alt_counts or ():
-        agree2, _, _ = _agree(mean, var, alt, prior, semantic, rtol, atol)
-        agree = agree | agree2
+        m2, v2, _, _ = _agree(mean, var, alt, prior, semantic, rtol, atol)
+        agree |= m2 & v2
+        mean_ok |= m2
+        var_ok |= v2
         observed |= alt.sum(axis=1) > 0
     considered = observed | ~agree
     n = int(considered.sum())
-    share = float(agree[considered].mean()) if n else 1.0
-    return Comparison(share, n, agree, ref_val, ref_var, prior=prior)
+    if not n:
+        return Comparison(1.0, 0, agree, ref_val, ref_var, prior=prior, mean_share=1.0,
+                          var_share=1.0)
+    return Comparison(float(agree[considered].mean()), n, agree, ref_val, ref_var, prior=prior,
+                      mean_share=float(mean_ok[considered].mean()),
+                      var_share=float(var_ok[considered].mean()))
 
 
 def _agree(mean, var, counts, prior, semantic, rtol, atol):
+    """(mean or class agrees, variance agrees, reference mean or class, reference variance)."""
     ref_mean, ref_var = posterior(counts, prior, semantic)
     var_ok = np.isclose(var, ref_var, rtol=rtol, atol=atol)
     if semantic:
@@ -132,8 +150,8 @@ def _agree(mean, var, counts, prior, semantic, rtol, atol):
         ref_cls = np.argmax(ref_mean, axis=1)
         # a tie in the reference: any of the tied classes is right
         tied = np.isclose(ref_mean[np.arange(len(top)), student_cls], top, rtol=rtol, atol=atol)
-        return tied & var_ok, ref_cls, ref_var
-    return np.isclose(mean, ref_mean, rtol=rtol, atol=atol) & var_ok, ref_mean, ref_var
+        return tied, var_ok, ref_cls, ref_var
+    return np.isclose(mean, ref_mean, rtol=rtol, atol=atol), var_ok, ref_mean, ref_var
 
 
 def implied_prior(var, counts, semantic: bool, n_classes: int = 7):
@@ -168,7 +186,8 @@ def best_match(task: int, grid_size: float, mean, var, priors, rtol: float, atol
         for prior in dict.fromkeys(p for p in cand if p is not None and np.isfinite(p) and p > 0):
             c = compare(mean, var, counts, prior, semantic, rtol, atol, alt)
             c.label = label
-            if best is None or c.share > best.share + 1e-12:
+            if best is None or (c.share, c.mean_share + c.var_share) > \
+                    (best.share + 1e-12, best.mean_share + best.var_share + 1e-12):
                 best = c
             if best.share == 1.0:
                 return best
@@ -223,16 +242,15 @@ def diagnose(task: int, grid_size: float, mean, var, prior: float, rtol: float, 
         if best is None or comp.share > best[1]:
             best = (text, comp.share)
     # mean right, variance wrong
-    ref_mean, ref_var = posterior(counts, prior, semantic)
-    if semantic:
-        mean_ok = np.argmax(mean, axis=1) == np.argmax(ref_mean, axis=1)
-    else:
-        mean_ok = np.isclose(mean, ref_mean, rtol=rtol, atol=atol)
-    var_ok = np.isclose(var, ref_var, rtol=rtol, atol=atol)
-    observed = counts.sum(axis=1) > 0
-    if observed.any() and mean_ok[observed].mean() > 0.97 and var_ok[observed].mean() < 0.5:
-        return ("the means agree but the variances do not: check the variance formula "
-                "(Eq. 3 / Eq. 10, the variance of the most likely class)", float(mean_ok[observed].mean()))
+    mean_ok, var_ok, _, ref_var = _agree(mean, var, counts, prior, semantic, rtol, atol)
+    if mean_ok.mean() > 0.97 and var_ok.mean() < 0.97:
+        bad = ~var_ok
+        cap = float(var.max())
+        if np.all(ref_var[bad] > cap) and np.all(np.isclose(var[bad], cap, rtol=rtol, atol=atol)):
+            return (f"the variance is capped at {cap:g} (the reference's is larger in those "
+                    "cells)", float(bad.mean() + var_ok.mean()))
+        return ("the means (classes) agree but the variances do not: check the variance formula "
+                "(Eq. 3 / Eq. 10, the variance of the most likely class)", float(mean_ok.mean()))
     if best and best[1] >= 0.8:
         return best
     return None

@@ -7,9 +7,10 @@ BUDGET = ("Maps are graded at {sizes} so that a solution as slow as the course t
           "minute per task at 0.5 m) finishes all four tasks within Gradescope's 10 minutes on one "
           "core; each task has {timeout:g} s and {memory} MB. A cell agrees when its mean and "
           "variance (semantic: most likely class and its variance) match the exact reference within "
-          "a relative tolerance of {rtol:g} (absolute {atol:g}); the points grow linearly from "
-          "{lo:.0%} to {hi:.0%} of the compared cells (the cells any reference observes, and any "
-          "cell that differs). Legitimate readings of the handout (free-sample step 0.1 m, 2l/3 or "
+          "a relative tolerance of {rtol:g} (absolute {atol:g}). {mw:.0%} of a task's points go to "
+          "the means (classes), the rest to the variances, each growing linearly from {lo:.0%} to "
+          "{hi:.0%} of the compared cells agreeing (the cells any reference observes, and any cell "
+          "that differs). Legitimate readings of the handout (free-sample step 0.1 m, 2l/3 or "
           "the grid size, the closest sample only, a sample on the end point or not, any prior) "
           "each have their own reference: the best one counts.")
 
@@ -21,7 +22,8 @@ def write_report(out: Path, results: dict, tests: list, notes: list, sizes: list
     lines = ["# HW4 mapping: autograder report", "", results["output"], ""]
     lines.append(BUDGET.format(sizes=", ".join(f"{g:g} m" for g in sizes), timeout=cfg["timeout"],
                                memory=cfg["memory"], rtol=cfg["rtol"], atol=cfg["atol"],
-                               lo=cfg["zero_credit_share"], hi=cfg["full_credit_share"]))
+                               lo=cfg["zero_credit_share"], hi=cfg["full_credit_share"],
+                               mw=cfg["mean_weight"]))
     if isolation:
         lines += ["", "Sandbox on this machine: " + "; ".join(isolation) + "."]
     lines += ["", "| test | points | time |", "|---|---|---|"]
