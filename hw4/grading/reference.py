@@ -37,10 +37,10 @@ def variants(task: int, grid_size: float) -> list[tuple[str, dict]]:
                         ("free samples every 2l/3", 2 * L / 3),
                         ("free samples every grid size", grid_size)):
         out.append((label, {"sample_step": step}))
-    out.append(("closest free sample only (every 0.1 m)", {"sample_step": 0.1,
+    for label, step in (("every 0.1 m", 0.1), ("every 2l/3", 2 * L / 3),
+                        ("every grid size", grid_size)):
+        out.append((f"closest free sample only ({label})", {"sample_step": step,
                                                            "free_samples": "closest"}))
-    out.append(("closest free sample only (every grid size)", {"sample_step": grid_size,
-                                                               "free_samples": "closest"}))
     return out
 
 
