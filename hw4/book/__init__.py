@@ -276,10 +276,14 @@ def map_and_variance(m, axes, label: str, scale, window: str = "building"):
     ``scale`` = (vmin, vmax) in ``axes[1]``, both zoomed onto ``window`` (default: the whole
     observed building, without the empty margins of the template's map). A colour bar sits under
     each panel that needs one; returns the variance image."""
+    import matplotlib as mpl
     from ..core import plotting
     fig = axes[0].figure
     if m.map["mean"].shape[1] > 1:        # semantic: class map, its legend is the figure's
-        plotting.plot_semantic(m, ax=axes[0], title=f"class, {label}", legend=False)
+        im = plotting.plot_semantic(m, ax=axes[0], title=f"class, {label}", legend=False)
+        # an invisible colour bar keeps the two panels the same size
+        fig.colorbar(mpl.cm.ScalarMappable(), ax=axes[0], location="bottom", shrink=0.8,
+                     aspect=30, label=" ").ax.set_visible(False)
     else:
         im = plotting.plot_mean(m, ax=axes[0], title=f"mean, {label}", colorbar=False,
                                 unobserved=plotting.UNOBSERVED_LIGHT)
