@@ -150,3 +150,29 @@ def test_rviz_config_copy():
     assert "    Saved: ~" in out
     for line in ("  X: 0", "  Y: 0", "  Width: 1600", "  Height: 1000", "  Hide Left Dock: true"):
         assert line in out
+
+
+def test_stored_reference_maps_round_trip(tmp_path):
+    r = 0.3
+    pts = (np.array([[0, 0, 0], [3, -2, 1], [-5, 4, 2]]) + 0.5) * r
+    cls = np.array([9, 13, 1])
+    rgba = np.column_stack([rosref.REF_KITTI_RGB[cls] / 255.0, np.ones(3)])
+    kitti = tmp_path / "k.bag"
+    kitti.write_bytes(_bag([("/occupied_cells_vis_array", 1, _array(_marker(pts[:1], rgba[:1], 0.6))),
+                            ("/occupied_cells_vis_array", 3, _array(_marker(pts, rgba, 0.6)))]))
+    toy_pts = np.array([[0.0, 0.1, 0.2], [0.05, 0.05, 0.05]])
+    toy_rgba = np.column_stack([rosref.REF_TOY_RGB[[1, 3]] / 255.0, np.ones(2)])
+    toy = tmp_path / "t.bag"
+    toy.write_bytes(_bag([("/semantic_csm", 1, _array(_marker(toy_pts[:1], toy_rgba[:1], 0.1))),
+                          ("/semantic_bki", 2, _array(_marker(toy_pts[1:], toy_rgba[1:], 0.1)))]))
+    path = rosref.save_reference_maps(tmp_path / "store", {"kitti04_clean": kitti, "toy": toy})
+    maps = rosref.load_reference_maps(path)
+    k = maps["kitti04_clean", "/occupied_cells_vis_array"]
+    assert np.allclose(k.centres, pts) and np.array_equal(k.cls, cls)
+    assert k.resolution == 0.3 and k.cube_edge == pytest.approx(0.6) and len(k.times) == 2
+    assert np.array_equal(maps["toy", "/semantic_csm"].cls, [1])
+    assert np.allclose(maps["toy", "/semantic_bki"].centres, toy_pts[1:])
+    with pytest.raises(InputError):
+        rosref.save_reference_maps(tmp_path / "x", {"toy": kitti})   # no toy topics in it
+    with pytest.raises(InputError):
+        rosref.load_reference_maps(tmp_path / "missing.npz")

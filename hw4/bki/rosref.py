@@ -255,6 +255,70 @@ def bag_maps(path, topic: str, palette: np.ndarray) -> list[tuple[float, np.ndar
     return [(m.t, *marker_voxels(parse_marker_array(m.data), palette)) for m in msgs]
 
 
+# --------------------------------------------------------------------------- stored maps
+def save_reference_maps(out_dir, bags: dict) -> Path:
+    """Store the reference's published maps compactly for the book (``reference_maps.npz``).
+
+    ``bags`` maps a name (``kitti04_clean``, ``kitti04_noisy``, ``toy``) to a bag path. For each
+    map topic of the bag the last map is kept as voxel indices ``floor(2 c / r)`` on the half-voxel
+    lattice (int32, (M, 3)) and classes (uint8), and the receive times of all its messages [s]
+    (the node's pace). Written atomically; returns the path.
+    """
+    arrays = {}
+    for name, bag in bags.items():
+        kitti = name.startswith("kitti")
+        palette = REF_KITTI_RGB if kitti else REF_TOY_RGB
+        r = 0.3 if kitti else 0.1
+        msgs = read_bag(bag)
+        for topic in TOPICS["semantickitti" if kitti else "toy"]:
+            got = [m for m in msgs if m.topic == topic]
+            if not got:
+                raise InputError(f"{bag} holds no map on {topic}.")
+            c, k, edge = marker_voxels(parse_marker_array(got[-1].data), palette)
+            key = f"{name}{topic.replace('/', '__')}"
+            arrays[key + "__idx"] = np.round(2 * c / r).astype(np.int32)
+            arrays[key + "__cls"] = k.astype(np.uint8)
+            arrays[key + "__times"] = np.array([m.t for m in got])
+            arrays[key + "__meta"] = np.array([r, edge])
+    out = Path(out_dir) / "reference_maps.npz"
+    out.parent.mkdir(parents=True, exist_ok=True)
+    tmp = out.with_suffix(".part.npz")
+    np.savez_compressed(tmp, **arrays)
+    tmp.replace(out)
+    return out
+
+
+@dataclass
+class ReferenceMap:
+    """One map the reference published: voxel ``centres`` (M, 3) [m] in its frame ``map``, classes
+    ``cls`` (M,), ``resolution`` and RViz's ``cube_edge`` [m], the receive ``times`` [s] of all
+    maps on the topic (one per scan for SemanticKITTI)."""
+
+    centres: np.ndarray
+    cls: np.ndarray
+    resolution: float
+    cube_edge: float
+    times: np.ndarray
+
+
+def load_reference_maps(path) -> dict:
+    """{(name, topic): :class:`ReferenceMap`} from :func:`save_reference_maps`'s file."""
+    path = Path(path)
+    if not path.is_file():
+        raise InputError(f"{path} is missing: run 'bash scripts/reference_ros.sh --book'.")
+    z = np.load(path)
+    out = {}
+    for key in z.files:
+        if key.endswith("__idx"):
+            base = key[:-5]
+            name, topic = base.split("__", 1)
+            r, edge = z[base + "__meta"]
+            out[name, "/" + topic.replace("__", "/")] = ReferenceMap(
+                z[key].astype(float) * r / 2, z[base + "__cls"].astype(np.int64), float(r),
+                float(edge), z[base + "__times"])
+    return out
+
+
 # --------------------------------------------------------------------------- comparison
 def half_keys(centres: np.ndarray, resolution: float) -> np.ndarray:
     """Int64 keys of voxel centres on the half-voxel lattice (``round(2 c / r)`` per axis), so that
@@ -344,69 +408,89 @@ class OurMap:
     scans: int
 
 
+def _insert(vmap, scans, cfg) -> float:
+    """Insert scans (already checked) into a map; return the CPU time [s] of the updates."""
+    from .training import training_data
+    cpu = 0.0
+    for scan in scans:
+        t0 = time.process_time()
+        td = training_data(scan, cfg.ds_resolution, cfg.free_resolution, cfg.max_range, cfg.num_class)
+        vmap.update(td.points, td.labels)
+        cpu += time.process_time() - t0
+    return cpu
+
+
+def _maps(make, scans, cfg, methods) -> dict:
+    """Build the maps ``methods`` (``sbki``, ``scsm``, ``sbki_blocks``) over the same scans.
+
+    ``sbki_blocks`` is S-BKI with the reference's 7-block neighbourhood
+    (:class:`hw4.bki.reference.FaceNeighbourMap`); when it is asked for, ``sbki`` comes from the
+    same run (the full map it wraps) and shares its time.
+    """
+    from .reference import FaceNeighbourMap
+    out = {}
+    for method in methods:
+        if method == "sbki" and "sbki_blocks" in methods:
+            continue
+        if method == "sbki_blocks":
+            vmap = FaceNeighbourMap(make("sbki"))
+            cpu = _insert(vmap, scans(), cfg)
+            out["sbki_blocks"] = OurMap(vmap.view(), cpu, 0)
+            if "sbki" in methods:
+                out["sbki"] = OurMap(vmap.map.view(), cpu, 0)
+        else:
+            vmap = make(method)
+            cpu = _insert(vmap, scans(), cfg)
+            out[method] = OurMap(vmap.view(), cpu, 0)
+    return out
+
+
 def our_kitti_maps(folder, source: str = "clean", scans: int = 10, methods=("sbki", "scsm"),
-                   emulate_blocks: bool = False, rate: float = 0.3, seed: int = 0) -> dict:
+                   rate: float = 0.3, seed: int = 0) -> dict:
     """Our maps of the first ``scans`` scans with the reference's inputs.
 
     The reference's frame (``init_trans_to_ground @ P_t @ Tr``), its sensor origin (the camera
     translation), its label classes (``source``) with unlabeled hits inserted as class 0, and the
-    settings of ``semantickitti.toml`` (the reference's). ``emulate_blocks`` adds the reference's
-    7-block neighbourhood (:class:`hw4.bki.reference.FaceNeighbourMap`) to S-BKI.
-    Returns {method: :class:`OurMap`}.
+    settings of ``semantickitti.toml`` (the reference's). ``methods`` from ``sbki``, ``scsm`` and
+    ``sbki_blocks`` (S-BKI with the reference's 7-block neighbourhood,
+    :class:`hw4.bki.reference.FaceNeighbourMap`). Returns {method: :class:`OurMap`}.
     """
     from .config import load_config
     from .kitti import SemanticKITTISequence
     from .pipeline import new_map
-    from .reference import FaceNeighbourMap
     from .semantic_eval import _checked
-    from .training import training_data
     cfg = load_config("semantickitti")
     rl = segmenter(rate, seed) if source == "noisy" else None
     seq = SemanticKITTISequence(folder, frame="reference", origin="reference", unlabeled="insert",
                                 relabel=rl)
     n = min(scans, len(seq))
-    out = {}
-    for method in methods:
-        vmap = new_map(cfg, method)
-        if emulate_blocks and method == "sbki":
-            vmap = FaceNeighbourMap(vmap)
-        cpu = 0.0
-        for t in range(n):
-            scan = _checked(seq.scan(t), cfg.num_class)
-            t0 = time.process_time()
-            td = training_data(scan, cfg.ds_resolution, cfg.free_resolution, cfg.max_range,
-                               cfg.num_class)
-            vmap.update(td.points, td.labels)
-            cpu += time.process_time() - t0
-        out[method] = OurMap(vmap.view(), cpu, n)
+    out = _maps(lambda m: new_map(cfg, m), lambda: (_checked(seq.scan(t), cfg.num_class)
+                                                   for t in range(n)), cfg, methods)
+    for om in out.values():
+        om.scans = n
     return out
 
 
-def our_toy_maps(folder=None, emulate_blocks: bool = False) -> dict:
-    """Our S-CSM and S-BKI maps of the toy scans on the reference's grids (S-CSM centres on multiples
-    of the voxel edge, :class:`hw4.bki.reference.ShiftedGrid`). Returns {method: :class:`OurMap`}."""
+def our_toy_maps(folder=None, methods=("scsm", "sbki")) -> dict:
+    """Our maps of the toy scans on the reference's grids (S-CSM centres on multiples of the voxel
+    edge, :class:`hw4.bki.reference.ShiftedGrid`); ``methods`` as in :func:`our_kitti_maps`.
+    Returns {method: :class:`OurMap`}."""
     from .config import load_config
     from .pipeline import new_map, scan_source
-    from .reference import FaceNeighbourMap, ShiftedGrid
+    from .reference import ShiftedGrid
     from .scan import validate_scan
-    from .training import training_data
     cfg = load_config("toy")
     loaders = scan_source("toy", folder)[:cfg.scans]
     scans = [validate_scan(load(), cfg.num_class) for load in loaders]
-    out = {}
-    for method in ("scsm", "sbki"):
+
+    def make(method):
         if method == "scsm":
-            vmap = ShiftedGrid.reference_csm(cfg.resolution, cfg.num_class, prior=cfg.prior,
+            return ShiftedGrid.reference_csm(cfg.resolution, cfg.num_class, prior=cfg.prior,
                                              sf2=cfg.sf2, ell=cfg.ell, var_thresh=cfg.var_thresh)
-        else:
-            vmap = new_map(cfg, "sbki")
-            if emulate_blocks:
-                vmap = FaceNeighbourMap(vmap)
-        t0 = time.process_time()
-        for s in scans:
-            td = training_data(s, cfg.ds_resolution, cfg.free_resolution, cfg.max_range, cfg.num_class)
-            vmap.update(td.points, td.labels)
-        out[method] = OurMap(vmap.view(), time.process_time() - t0, len(scans))
+        return new_map(cfg, method)
+    out = _maps(make, lambda: iter(scans), cfg, methods)
+    for om in out.values():
+        om.scans = len(scans)
     return out
 
 
@@ -476,39 +560,67 @@ def rviz_config(text: str, topics=None, view: dict | None = None, hide_docks: bo
 
 
 # --------------------------------------------------------------------------- command line
-def _compare_kitti(args) -> dict:
-    maps = bag_maps(args.bag, TOPICS["semantickitti"][0], REF_KITTI_RGB)
+def compare_kitti(bag, folder, source: str = "clean", scans: int = 10) -> dict:
+    """The reference's last published map in ``bag`` against ours (see :func:`our_kitti_maps`).
+
+    Returns a dict: ``messages``, ``cube_edge`` [m] (RViz's cube), ``ref_voxels``,
+    ``node_s_per_scan`` (median time between published maps: insertion and publishing [s]) and,
+    per map of ours (``sbki``, ``scsm``, ``sbki_blocks``), :func:`compare_voxels` plus
+    ``our_cpu_s_per_scan`` and ``max_extra_evidence`` (the largest evidence of a voxel that only
+    ours calls occupied).
+    """
+    maps = bag_maps(bag, TOPICS["semantickitti"][0], REF_KITTI_RGB)
     if not maps:
-        raise InputError(f"{args.bag} holds no map on {TOPICS['semantickitti'][0]}.")
+        raise InputError(f"{bag} holds no map on {TOPICS['semantickitti'][0]}.")
     t, centres, cls, edge = maps[-1]
     times = np.array([m[0] for m in maps])
     res = {"messages": len(maps), "cube_edge": edge, "ref_voxels": int(len(centres)),
            "node_s_per_scan": float(np.median(np.diff(times))) if len(times) > 1 else float("nan")}
-    ours = our_kitti_maps(args.folder, args.labels, args.scans)
-    blocks = our_kitti_maps(args.folder, args.labels, args.scans, methods=("sbki",),
-                            emulate_blocks=True)
-    for name, om in (("sbki", ours["sbki"]), ("scsm", ours["scsm"]), ("sbki_blocks", blocks["sbki"])):
-        c, k = occupied_as_reference(om.view)
-        res[name] = compare_voxels(centres, cls, c, k, 0.3)
-        res[name]["our_cpu_s_per_scan"] = om.seconds / om.scans
+    ours = our_kitti_maps(folder, source, scans, methods=("sbki", "scsm", "sbki_blocks"))
+    for name, om in ours.items():
+        res[name] = against(centres, cls, om, 0.3)
     return res
 
 
-def _compare_toy(args) -> dict:
+def compare_toy(bag, folder=None) -> dict:
+    """The reference's toy maps (S-CSM and S-BKI topics of ``bag``) against ours, as
+    :func:`compare_kitti` (no timing: the toy node prints its own)."""
     res = {}
-    ours = our_toy_maps(args.folder)
-    blocks = our_toy_maps(args.folder, emulate_blocks=True)
-    msgs = read_bag(args.bag)
+    ours = our_toy_maps(folder, methods=("scsm", "sbki", "sbki_blocks"))
+    msgs = read_bag(bag)
     for method, topic in (("scsm", "/semantic_csm"), ("sbki", "/semantic_bki")):
         got = [m for m in msgs if m.topic == topic]
         if not got:
-            raise InputError(f"{args.bag} holds no map on {topic}.")
+            raise InputError(f"{bag} holds no map on {topic}.")
         centres, cls, edge = marker_voxels(parse_marker_array(got[-1].data), REF_TOY_RGB)
-        for name, om in ((method, ours[method]), (method + "_blocks", blocks[method])):
-            c, k = occupied_as_reference(om.view)
-            res[name] = compare_voxels(centres, cls, c, k, 0.1)
-            res[name]["cube_edge"] = edge
+        for name in (method, method + "_blocks"):
+            if name in ours:
+                res[name] = against(centres, cls, ours[name], 0.1)
+                res[name]["cube_edge"] = edge
     return res
+
+
+def against(centres, cls, om: OurMap, resolution: float, prior: float = 0.001) -> dict:
+    """:func:`compare_voxels` of the reference's voxels and ours, with our CPU time per scan and the
+    largest evidence (concentration minus the ``prior`` of the configs) of a voxel only ours has."""
+    c, k = occupied_as_reference(om.view)
+    out = compare_voxels(centres, cls, c, k, resolution)
+    out["our_cpu_s_per_scan"] = om.seconds / max(om.scans, 1)
+    _, extra = only_masks(centres, c, resolution)
+    ev = om.view.alpha[om.view.cls > 0][extra] - prior
+    top = ev.max(axis=1) if len(ev) else np.zeros(0)
+    out["max_extra_evidence"] = float(top.max()) if len(top) else 0.0
+    out["extra_tiny"] = float(np.mean(top < TINY)) if len(top) else 1.0
+    from .voxelmap import UNKNOWN
+    unk = om.view.state[om.view.cls > 0][extra] == UNKNOWN
+    out["extra_unknown"] = float(unk.mean()) if len(unk) else 1.0
+    return out
+
+
+TINY = 1e-5
+"""Evidence below which a voxel's weight is a kernel tail that the reference's float32 kernel
+(``bki.h``: distances scaled by ``1 / ell`` in float, results <= 0 dropped) rounds to nothing:
+the sparse kernel's two terms cancel near ``d = ell`` to about ``sf2 * 1e-7`` in float32."""
 
 
 def main(argv=None) -> int:
@@ -550,7 +662,10 @@ def main(argv=None) -> int:
         if args.dataset == "semantickitti" and args.folder is None:
             from .pipeline import kitti_04_folder
             args.folder = kitti_04_folder()
-        res = (_compare_kitti if args.dataset == "semantickitti" else _compare_toy)(args)
+        if args.dataset == "semantickitti":
+            res = compare_kitti(args.bag, args.folder, args.labels, args.scans)
+        else:
+            res = compare_toy(args.bag, args.folder)
         text = json.dumps(res, indent=1)
         print(text)
         if args.json:
