@@ -8,7 +8,8 @@
 #   bash scripts/reference_ros.sh --no-rviz  # build, run the nodes headless, record, compare (CI)
 #   bash scripts/reference_ros.sh --book     # also copy the screenshots and video to notebooks/_static
 #
-# Options: --out DIR (default out/ros), --no-rviz, --book, --keep-going-without-install.
+# Options: --out DIR (default out/ros), --no-rviz, --no-compare (record only; test.sh compares
+# in tests/test_bki_rosref_ros.py), --book.
 # Needs Debian 12 (or an Ubuntu with ROS 1 Noetic's Debian packages); installs them when run as
 # root, otherwise prints the apt-get command. The workspace .ros_ws/ is git-ignored.
 set -eo pipefail
@@ -17,12 +18,14 @@ ROOT=$PWD
 OUT=out/ros
 RVIZ=1
 BOOK=0
+COMPARE=1
 while [ $# -gt 0 ]; do
     case "$1" in
         --out) OUT=$2; shift 2 ;;
         --no-rviz) RVIZ=0; shift ;;
         --book) BOOK=1; shift ;;
-        -h|--help) sed -n '2,14p' "$0" | sed 's/^# \{0,1\}//'; exit 0 ;;
+        --no-compare) COMPARE=0; shift ;;
+        -h|--help) sed -n '2,15p' "$0" | sed 's/^# \{0,1\}//'; exit 0 ;;
         *) echo "reference_ros: unknown option $1 (see --help)" >&2; exit 2 ;;
     esac
 done
@@ -195,11 +198,12 @@ start_x() {  # start_x N: a virtual screen :N, 2048x1400, 24 bit
 grab() {  # grab DISPLAY X Y W H FILE: one screenshot of a screen region
     ffmpeg -loglevel error -y -f x11grab -draw_mouse 0 -video_size "${4}x${5}" -i ":$1+$2,$3" -frames:v 1 "$6"
 }
-grab_stable() {  # like grab, once two grabs 3 s apart are identical (RViz has finished drawing)
+grab_stable() {  # like grab, once two grabs 3 s apart agree above the bottom 120 px (RViz's
+    # time panel there changes every second): RViz has finished drawing the map
     local prev="" cur
     for _ in $(seq 60); do
         grab "$@"
-        cur=$(md5sum < "$6")
+        cur=$(ffmpeg -loglevel error -i "$6" -vf "crop=iw:ih-120:0:0" -f md5 - 2>/dev/null)
         [ "$cur" = "$prev" ] && return 0
         prev=$cur
         sleep 3
@@ -213,9 +217,11 @@ bag_run() {  # bag_run NAME LAUNCH DONE_PATTERN DONE_COUNT TOPICS...: run a laun
     rm -f "$OUT/$name.bag" "$OUT/$name.bag.active"
     /usr/lib/rosbag/record -O "$OUT/$name.bag" "$@" > "$LOG/$name.record.log" 2>&1 &
     local rec=$!
+    PIDS+=("$rec")
     sleep 2
     roslaunch semantic_bki "$launch" > "$LOG/$name.log" 2>&1 &
     LAUNCH=$!
+    PIDS+=("$LAUNCH")
     wait_for "$LOG/$name.log" "$pat" "$cnt" 900
     sleep 3                                       # the last map reaches the recorder
     stop "$rec"
@@ -233,7 +239,7 @@ done
 ln -sfn predictions_clean "$KD/predictions"
 say "   toy_example_node (S-CSM, then S-BKI, 12 scans), without RViz"
 bag_run toy toy_example_node_norviz.launch "min_var" 2 /semantic_csm /semantic_bki
-grep -h "finished in" "$LOG/toy.log" | sed 's/^/   node: /' || true
+grep -h "finished in" "$LOG/toy.log" | sed -e "s/\x1b\[[0-9;]*m//g" -e "s/^/   node: /" || true
 stop "$LAUNCH"
 
 if [ "$RVIZ" = 1 ]; then
@@ -257,30 +263,39 @@ if [ "$RVIZ" = 1 ]; then
     ln -sfn predictions_clean "$KD/predictions"
     roslaunch semantic_bki semantickitti_node_norviz.launch > "$LOG/kitti04_views.log" 2>&1 &
     LAUNCH=$!
+    PIDS+=("$LAUNCH")
     wait_for "$LOG/kitti04_views.log" "Inserted point cloud" "$NSCANS" 600
-    rv() {  # rv SRC NAME TOPICS VIEW: one RViz window with a config copy, screenshot, close
-        "$PY" -m hw4.bki.rosref rviz-config "$PKG/rviz/$1" "$WS/$2.rviz" --topics "$3" --view "$4" \
-            --hide-docks --size 1600x1000
-        rviz -d "$WS/$2.rviz" > "$LOG/$2.log" 2>&1 &
+    rv() {  # rv SRC NAME TOPICS [VIEW]: RViz with a config copy (window at (0, 0), --fullscreen: no
+        # panels), screenshot, close
+        "$PY" -m hw4.bki.rosref rviz-config "$PKG/rviz/$1" "$WS/$2.rviz" --topics "$3" ${4:+--view "$4"}
+        rviz --fullscreen -d "$WS/$2.rviz" > "$LOG/$2.log" 2>&1 &
         local r=$!
+        PIDS+=("$r")
         sleep 5
-        grab_stable "$DISP" 0 0 1600 1000 "$OUT/$2.png"
+        grab_stable "$DISP" 0 0 1854 1056 "$OUT/$2.png"   # the window: the config's size at (0, 0)
         stop "$r"
     }
     say "   RViz views of sequence 04 (top, close)"
     rv semantickitti_node.rviz rviz_kitti04_top /occupied_cells_vis_array \
-        '{"Class": "rviz/TopDownOrtho", "Scale": 11, "X": 0, "Y": 8, "Angle": 0}'
+        '{"Class": "rviz/TopDownOrtho", "Scale": 9.5, "X": 0, "Y": 6, "Angle": 1.5708}'
     rv semantickitti_node.rviz rviz_kitti04_close /occupied_cells_vis_array \
         '{"Class": "rviz/Orbit", "Distance": 45, "Focal Point": [0, 14, 0], "Pitch": 0.5, "Yaw": -1.5708}'
     stop "$LAUNCH"
     say "   roslaunch semantic_bki toy_example_node.launch with RViz"
     roslaunch semantic_bki toy_example_node.launch > "$LOG/toy_rviz.log" 2>&1 &
     LAUNCH=$!
+    PIDS+=("$LAUNCH")
     wait_for "$LOG/toy_rviz.log" "min_var" 2 600
     grab_stable "$DISP" 65 312 1854 1056 "$OUT/rviz_toy.png"
+    stop "$LAUNCH"
+    # its four maps one at a time (the launch file shows all four on top of each other), in the
+    # package's camera; the node alone, so that no other RViz window is on the screen
+    roslaunch semantic_bki toy_example_node_norviz.launch > "$LOG/toy_views.log" 2>&1 &
+    LAUNCH=$!
+    PIDS+=("$LAUNCH")
+    wait_for "$LOG/toy_views.log" "min_var" 2 600
     for t in semantic_csm semantic_bki semantic_csm_variance semantic_bki_variance; do
-        rv toy_example_node.rviz "rviz_toy_$t" "/$t" \
-            '{"Class": "rviz/Orbit", "Distance": 22, "Focal Point": [5, 5, 0], "Pitch": 0.75, "Yaw": 3.9}'
+        rv toy_example_node.rviz "rviz_toy_$t" "/$t" ""
     done
     stop "$LAUNCH"
     # a strip of frames of the video for print
@@ -289,6 +304,7 @@ if [ "$RVIZ" = 1 ]; then
 fi
 
 # ----------------------------------------------------------------------------- 7. compare
+if [ "$COMPARE" = 1 ]; then
 say "7/7 comparing the recorded maps with ours (hw4.bki.rosref)"
 for src in clean noisy; do
     "$PY" -m hw4.bki.rosref compare semantickitti "$OUT/kitti04_${src}.bag" --labels "$src" \
@@ -307,10 +323,16 @@ for name in ("kitti04_clean", "kitti04_noisy", "toy"):
     if "node_s_per_scan" in r:
         print(f"   {name:14s} node: {r['node_s_per_scan']:.2f} s per scan (between published maps)")
 EOF
+fi
 if [ "$BOOK" = 1 ] && [ "$RVIZ" = 1 ]; then
     say "copying the screenshots and the video to notebooks/_static (t5_rviz_*)"
     for f in "$OUT"/rviz_*.png "$OUT"/rviz_kitti04_mapping.mp4; do
         cp "$f" "$ROOT/notebooks/_static/t5_$(basename "$f")"
     done
+    # the published maps, compactly, for the chapter's comparison (the bags are 40 MB each)
+    "$PY" -c "import sys; from hw4.bki.rosref import save_reference_maps as s; \
+print(s(sys.argv[1], {'kitti04_clean': sys.argv[2], 'kitti04_noisy': sys.argv[3], 'toy': sys.argv[4]}))" \
+        "$ROOT/notebooks/reference_ros" "$OUT/kitti04_clean.bag" "$OUT/kitti04_noisy.bag" "$OUT/toy.bag"
+    cp "$LOG/toy.log" "$ROOT/notebooks/reference_ros/toy_node.log"
 fi
 say "done: $OUT (bags, screenshots, video, compare_*.json, logs/)"
