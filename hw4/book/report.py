@@ -51,7 +51,8 @@ REQUIRED = {
 """The figures the handout asks for, by task (its "visualize your map ... and its variance",
 "generate the map and the variance map using grid_size = [0.135, 0.270, 0.5]" of Tasks 2B and
 4B, whose 0.135 m maps are those of 2A / 4A, and Task 5's screenshots of the semantic map).
-Task 5's screenshots are the RViz figures ``fig-t5-rviz-*`` when the chapter has them; without
+Task 5's screenshots are the RViz figures ``fig-t5-rviz-*`` (images, not the video) when the
+chapter has them; without
 them, :data:`T5_FALLBACK` (the chapter's renders of the same map) stand in, as the chapter says."""
 T5_FALLBACK = ["fig-t5-kitti-3d", "fig-t5-kitti-top"]
 VIDEO = "t5_kitti04_mapping.mp4"
@@ -77,18 +78,24 @@ def _source(cell: dict) -> str:
     return "".join(src) if isinstance(src, list) else src
 
 
-def figure_cells(nb: dict) -> dict[str, dict]:
+def figure_cells(nb: dict, videos: bool = True, folder: Path | None = None) -> dict[str, dict]:
     """``{name: cell}`` of a notebook's figures: code cells with ``mystnb.figure.name`` and an
-    image output, and Markdown cells holding a ``{video}`` figure with ``:name:``."""
+    image output, and Markdown cells holding a ``{figure}`` or (with ``videos``) a ``{video}``
+    block with ``:name:`` (with ``folder``, the notebook's folder, only those whose file is
+    there: a screenshot not yet taken is not a figure the report can show)."""
     out = {}
+    kinds = "figure|video" if videos else "figure"
+    block = re.compile(r"^```\{(?:" + kinds + r")\} *([^\n]*)\n(?::[^\n]*\n)*?:name: (\S+)",
+                       re.M)
     for cell in nb["cells"]:
         name = cell.get("metadata", {}).get("mystnb", {}).get("figure", {}).get("name")
         if name and cell["cell_type"] == "code":
             if any("image/png" in o.get("data", {}) for o in cell.get("outputs", [])):
                 out[name] = cell
         elif cell["cell_type"] == "markdown":
-            for m in re.finditer(r"^```\{video\}[^\n]*\n(?::[^\n]*\n)*?:name: (\S+)", _source(cell), re.M):
-                out[m.group(1)] = cell
+            for m in block.finditer(_source(cell)):
+                if folder is None or (folder / m.group(1).strip()).is_file():
+                    out[m.group(2)] = cell
     return out
 
 
@@ -135,6 +142,11 @@ def background_equations(path: Path | None = None) -> dict[str, str]:
 
 # --------------------------------------------------------------------------- writing the report
 
+def _folder(task: int) -> Path:
+    """The folder of a task's chapter (its Markdown figures' paths are relative to it)."""
+    return (ROOT / TASKS[task]).parent
+
+
 def _pick(spec: str, available: list[str]) -> list[str]:
     """Names a marker asks for: ``A or B C`` -> A's matches if any, else B's and C's."""
     for option in spec.split(" or "):
@@ -164,7 +176,7 @@ def required_figures(t5: dict | None = None) -> dict[int, list[str]]:
     """:data:`REQUIRED` with Task 5's patterns resolved against the Task 5 chapter: its RViz
     figures when it has any, else :data:`T5_FALLBACK`."""
     t5 = t5 if t5 is not None else _load(ROOT / TASKS[5])
-    names = list(figure_cells(t5))
+    names = list(figure_cells(t5, videos=False))  # screenshots, not the video's still
     out = {task: list(figs) for task, figs in REQUIRED.items()}
     rviz = _pick(" ".join(REQUIRED[5]), names)
     out[5] = rviz or list(T5_FALLBACK)
@@ -174,7 +186,7 @@ def required_figures(t5: dict | None = None) -> dict[int, list[str]]:
 def _plan(task: int, text: str, nb: dict) -> list[tuple[str, str]]:
     """The report text of one task cut into ``("md", text)``, ``("figure", name)`` and
     ``("table", name)`` pieces, the markers resolved against the chapter ``nb``."""
-    figures, tables = figure_cells(nb), _blocks(nb, "table")
+    figures, tables = figure_cells(nb, folder=_folder(task)), _blocks(nb, "table")
     parts = MARK.split(text)  # [text, kind, spec, text, kind, spec, ..., text]
     pieces: list[tuple[str, object]] = [("md", parts[0])]
     for i in range(1, len(parts), 3):
@@ -198,7 +210,7 @@ def task_notebook(task: int, text: str, nb: dict, equations: dict[str, str],
     """The report's notebook for one task, and the figure names it holds.
 
     ``elsewhere``: names the other tasks of the report hold (a caption may refer to them)."""
-    figures = figure_cells(nb)
+    figures = figure_cells(nb, folder=_folder(task))
     tables = _blocks(nb, "table")
     cells = glue_cells(nb)
     placed: list[str] = []
@@ -225,10 +237,15 @@ def task_notebook(task: int, text: str, nb: dict, equations: dict[str, str],
         else:
             cell = figures[item]
             placed.append(item)
-            if cell["cell_type"] == "markdown":  # a {video} figure
-                block = re.search(r"^```\{video\}.*?^```[ \t]*$", _source(cell), re.M | re.S)
-                md.append("\n" + _fix_refs(block.group(0), defined, equations,
-                                           f"video {item} of {TASKS[task]}") + "\n")
+            if cell["cell_type"] == "markdown":  # a {figure} or {video} block
+                block = [b for b in re.finditer(r"^```\{(?:figure|video)\}.*?^```[ \t]*$",
+                                                _source(cell), re.M | re.S)
+                         if re.search(r"^:name: " + re.escape(item) + r"\s*$", b.group(0), re.M)]
+                text = block[0].group(0)
+                if width:
+                    text = re.sub(r"^:width: .*$", f":width: {width[0]}", text, flags=re.M)
+                md.append("\n" + _fix_refs(text, defined, equations,
+                                           f"figure {item} of {TASKS[task]}") + "\n")
                 continue
             flush()
             new = copy.deepcopy(cell)
@@ -350,7 +367,8 @@ def main(argv=None) -> int:
         gone = [f for f in figs if f not in placed[task]]
         if gone:
             print(f"report: warning: Task {task}'s required figure(s) {', '.join(gone)} are not "
-                  f"in report/task{task}.md.", file=sys.stderr)
+                  f"in the report (not asked for in report/task{task}.md, or the chapter's image "
+                  "file is missing); tests/test_report.py fails until they are.", file=sys.stderr)
     print(f"report: source in {args.out}")
     return 0
 
