@@ -5,8 +5,9 @@
 For each grid size (default the configuration's, 0.5 m) it times, side by side, (a) what the
 grader computes itself for all four tasks (the exact core's reference maps for every legitimate
 variant, the end-point readings included) and (b) the full grading of each submission (default:
-the template-style loop submission ``tests/grading_fixtures/exact``), with each task's time in
-the sandbox, and prints the ratio and whether the total fits Gradescope's 10 minutes.
+the loop submission ``tests/grading_fixtures/exact``, numpy over each pose's beams, and its twin
+``template_speed`` that loops like the course template), and prints the ratio, the score and
+whether the total fits Gradescope's 10 minutes.
 """
 from __future__ import annotations
 
@@ -38,8 +39,9 @@ def core_seconds(g: float) -> float:
 
 def main() -> None:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    fixtures = ROOT / "tests" / "grading_fixtures"
     p.add_argument("submissions", nargs="*", type=Path,
-                   default=[ROOT / "tests" / "grading_fixtures" / "exact"])
+                   default=[fixtures / "exact", fixtures / "template_speed"])
     p.add_argument("--grid-size", type=float, action="append")
     a = p.parse_args()
     sizes = a.grid_size or load()["grid_sizes"]

@@ -25,7 +25,7 @@ def load(path: Path | None = None) -> dict:
         out = {
             "grid_sizes": [float(x) for x in g.get("grid_sizes", [0.5])],
             "hidden_grid_sizes": [float(x) for x in g.get("hidden_grid_sizes", [])],
-            "timeout": float(g.get("timeout", 140)),
+            "timeout": float(g.get("timeout", 130)),
             "memory": int(g.get("memory", 2048)),
             "rtol": float(g.get("rtol", 1e-6)),
             "atol": float(g.get("atol", 1e-9)),

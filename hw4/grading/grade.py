@@ -271,7 +271,8 @@ def _grade_one(task, g, cfg, found, box_maker, slot, hide, timeout, memory, pts,
              f"{best.mean_share:.1%}, the variance in {best.var_share:.1%}: "
              f"{test['score']:g} / {pts:g} points."]
     if best.share < 1.0:
-        diag = reference.diagnose(task, g, mean, var, best.prior, cfg["rtol"], cfg["atol"])
+        diag = reference.diagnose(task, g, mean, var, best.prior, cfg["rtol"], cfg["atol"],
+                                  best.opts)
         if diag:
             lines.append(f"Most likely: {diag[0]} (explains {diag[1]:.0%} of the cells).")
         lines.append(_first_differences(grid, mean, var, best, semantic))
@@ -326,7 +327,7 @@ def _figure(out: Path, task, g, grid, mean, best, semantic) -> str | None:
         ax.set_title(f"{title}: {'most likely class' if semantic else 'mean'}")
     axes[2].imshow((~best.agree).reshape(ny, nx), origin="lower", extent=extent, cmap="Reds",
                    vmin=0, vmax=1)
-    axes[2].set_title("cells that differ (red)")
+    axes[2].set_title("cells that differ (red: mean or variance)")
     for ax in axes:
         ax.set_xlabel("x [m]")
     axes[0].set_ylabel("y [m]")

@@ -85,6 +85,7 @@ class Comparison:
     prior: float = 0.0
     mean_share: float = 0.0      # share of compared cells whose mean (class) agrees
     var_share: float = 0.0       # share of compared cells whose variance agrees
+    opts: dict = field(default_factory=dict)  # count_evidence options of the variant
 
 
 def credit(c: Comparison, mean_weight: float, lo: float, hi: float) -> float:
@@ -185,7 +186,7 @@ def best_match(task: int, grid_size: float, mean, var, priors, rtol: float, atol
             cand.append(ip)
         for prior in dict.fromkeys(p for p in cand if p is not None and np.isfinite(p) and p > 0):
             c = compare(mean, var, counts, prior, semantic, rtol, atol, alt)
-            c.label = label
+            c.label, c.opts = label, dict(opts)
             if best is None or (c.share, c.mean_share + c.var_share) > \
                     (best.share + 1e-12, best.mean_share + best.var_share + 1e-12):
                 best = c
@@ -194,15 +195,18 @@ def best_match(task: int, grid_size: float, mean, var, priors, rtol: float, atol
     return best
 
 
-def diagnose(task: int, grid_size: float, mean, var, prior: float, rtol: float, atol: float):
+def diagnose(task: int, grid_size: float, mean, var, prior: float, rtol: float, atol: float,
+             opts: dict | None = None):
     """What a difference most likely means: (sentence, share of cells it explains) or None.
 
-    Each hypothesis is a deliberately wrong reference; the one the submission matches best
-    (at least 80 % of cells) is named.
+    Each hypothesis is a deliberately wrong version of the reference of the variant ``opts``
+    (count_evidence options); the one the submission matches best (at least 80 % of cells) is
+    named.
     """
     cls = model_class(task)
     semantic = cls.semantic
-    _, counts = evidence(task, grid_size)
+    opts = dict(opts or {})
+    _, counts = evidence(task, grid_size, **opts)
     hyps = []
     free = counts.shape[1] - 1
     zero_free = counts.copy()
@@ -224,18 +228,14 @@ def diagnose(task: int, grid_size: float, mean, var, prior: float, rtol: float, 
     else:
         hyps.append(("alpha and beta are swapped (occupied counted as free)", counts[:, ::-1]))
     if cls.continuous:
-        _, dense = evidence(task, grid_size, beams="all")
-        hyps.append(("every beam is used, not only the beam nearest in bearing", dense))
+        if opts.get("free_samples", "all") == "all":
+            _, dense = evidence(task, grid_size, beams="all", **opts)
+            hyps.append(("every beam is used, not only the beam nearest in bearing", dense))
     else:
-        _, cont = evidence(2 if not semantic else 4, grid_size)
+        _, cont = evidence(4 if semantic else 2, grid_size)
         hyps.append(("the continuous (kernel) model was submitted for the discrete task", cont))
-    if semantic:
-        _, half = evidence(task, grid_size, w_obstacle=grid_size) if not cls.continuous else (None, None)
-        if half is not None:
-            hyps.append(("the obstacle is one grid size thick (w_obstacle = grid_size)", half))
-    elif not cls.continuous:
-        _, half = evidence(task, grid_size, w_obstacle=grid_size)
-        hyps.append(("the obstacle is one grid size thick (w_obstacle = grid_size)", half))
+        _, thin = evidence(task, grid_size, w_obstacle=grid_size)
+        hyps.append(("the obstacle is one grid size thick (w_obstacle = grid_size)", thin))
     best = None
     for text, c in hyps:
         comp = compare(mean, var, c, prior, semantic, rtol, atol)
