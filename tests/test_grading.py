@@ -330,3 +330,27 @@ def test_sample_count_readings_match_a_loop(kind):
                 if d < 0.2:
                     free += float(sparse_kernel(np.array([d]))[0])
         assert counts[i, 1] == pytest.approx(free, rel=1e-9, abs=1e-12), (kind, i)
+
+
+@pytest.mark.parametrize("argv,msg", [
+    (["grade", "--help"], None), (["check", "--help"], None), (["autograder", "--help"], None),
+    (["grade", "x", "--timeout", "-1"], "positive number"),
+    (["grade", "x", "--grid-size", "abc"], "positive number"),
+    (["check", "/nonexistent/files"], "does not exist"),
+])
+def test_commands_help_and_one_line_errors(argv, msg):
+    r = subprocess.run([sys.executable, "-m", "hw4", *argv], capture_output=True, text=True,
+                       timeout=120)
+    if msg is None:
+        assert r.returncode == 0 and "usage:" in r.stdout
+    else:
+        assert r.returncode == 2 and msg in r.stderr and "Traceback" not in r.stderr
+        assert len(r.stderr.strip().splitlines()) == 1, r.stderr
+
+
+def test_bad_configuration_is_one_line(tmp_path):
+    cfg = tmp_path / "c.toml"
+    cfg.write_text("[grading]\nfull_credit_share = 0.3\n[tasks.1]\n[tasks.2]\n[tasks.3]\n[tasks.4]\n")
+    r = subprocess.run([sys.executable, "-m", "hw4", "grade", str(FIX / "exact"), "--config",
+                        str(cfg), "--out", str(tmp_path / "o")], capture_output=True, text=True)
+    assert r.returncode == 2 and "credit_share" in r.stderr and "Traceback" not in r.stderr
