@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # The README's "build" command: set up, fetch the data, build the maps of tasks 1-4 into
-# out/maps, then the book (HTML and PDF) from the notebooks' stored outputs.
+# out/maps, then the book (HTML and PDF) and its report edition from the notebooks' stored outputs.
 set -eo pipefail
 cd "$(dirname "${BASH_SOURCE[0]}")"
 bash scripts/setup.sh

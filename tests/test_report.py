@@ -64,9 +64,14 @@ def test_glued_values_are_the_books_byte_for_byte(sources):
 
 
 def test_title_page_names_the_student(sources):
+    import yaml
     out, _ = sources
     assert "Jane Doe" in (out / "intro.md").read_text()
-    assert "Jane Doe" in (out / "_config.yml").read_text()
+    assert yaml.safe_load((out / "_config.yml").read_text())["author"] == "Jane Doe"
+    # the author line goes to LaTeX as it is: its special characters are escaped
+    assert yaml.safe_load(report._config("J_Doe & Co"))["author"] == r"J\_Doe \& Co"
+    unnamed = yaml.safe_load(report._config(None))
+    assert "no student name" in unnamed["sphinx"]["config"]["hw4_course_author"]
 
 
 def test_unknown_figure_or_caption_reference_stops_the_build(tmp_path):

@@ -266,6 +266,14 @@ def task_notebook(task: int, text: str, nb: dict, equations: dict[str, str],
     return out, placed
 
 
+def _latex_text(text: str) -> str:
+    """``text`` safe in LaTeX (the title page's author line is passed to LaTeX as it is)."""
+    special = {"\\": r"\textbackslash{}", "{": r"\{", "}": r"\}", "$": r"\$", "&": r"\&",
+               "#": r"\#", "^": r"\textasciicircum{}", "_": r"\_", "%": r"\%",
+               "~": r"\textasciitilde{}"}
+    return "".join(special.get(c, c) for c in text)
+
+
 def _config(name: str | None) -> str:
     """The report's ``_config.yml``: the book's PDF settings with the report's title and author."""
     import yaml
@@ -273,7 +281,7 @@ def _config(name: str | None) -> str:
     book = yaml.safe_load((ROOT / "_config.yml").read_text())
     cfg = {
         "title": "Mapping with Counting Sensor Models: homework report",
-        "author": name or "NA 568 Mobile Robotics, Homework 4",
+        "author": _latex_text(name) if name else "NA 568 Mobile Robotics, Homework 4",
         "copyright": book.get("copyright", ""),
         "only_build_toc_files": True,
         "exclude_patterns": ["_build/*", "**/.ipynb_checkpoints/*"],
