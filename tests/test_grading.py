@@ -160,11 +160,13 @@ def test_naive_import_of_the_grader_scores_zero(tmp_path):
 
 
 def test_attacks_memory_forks_forgery_flood(tmp_path, capfd):
-    res = grade(_sub(tmp_path, "attack_b", "attacks_b"), tmp_path / "out", grid_sizes=G,
-                timeout=60)
+    res = grade(_sub(tmp_path, "attack_b", "attacks_b", KILL_PARENT=sandbox.is_root()),
+                tmp_path / "out", grid_sizes=G, timeout=60)
     _valid(res)
     t = _tests(res)
     assert t[1]["score"] == 0 and "memory" in t[1]["output"], t[1]["output"]
+    if sandbox.is_root():  # we are alive: the grader could not be killed
+        assert "kill blocked" in t[1]["output"] and "KILLED THE PARENT" not in t[1]["output"]
     assert t[2]["score"] == 0 and "forked" in t[2]["output"]
     if sandbox.is_root():
         n = int(t[2]["output"].split("forked ")[1].split()[0])
