@@ -19,7 +19,8 @@ from pathlib import Path
 import pytest
 
 ROOT = Path(__file__).resolve().parent.parent
-HTML = ROOT / "_build" / "html"
+# the build to test: _build/html, or another build (HW4_BOOK_HTML=/path/to/html)
+HTML = Path(os.environ.get("HW4_BOOK_HTML") or ROOT / "_build" / "html")
 SHOTS = ROOT / "_build" / "browser"
 CHROMIUM = ("chromium", "chromium-browser", "google-chrome")
 

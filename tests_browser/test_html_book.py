@@ -8,18 +8,28 @@ page-contents buttons open their drawers, at 1400 px the
 sidebar button collapses and restores the chapter list. Screenshots of each page at both widths
 (and of the open drawer) go to ``_build/browser/`` for a person to look at.
 
+Also, at both widths: figures open in the page's zoom viewer at a readable scale (not the bare
+PNG) and the phone's "Zoom" button covers no part of its figure; a table wider than its column
+shows a shade at the edge that has more to show; search from disk shows a snippet under each
+result; a page without maths loads no MathJax; what every page loads besides its own content (the
+theme's CSS, scripts and fonts) stays under a measured bound.
+
 Run after the book is built (test.sh does): ``python -m pytest -p no:cacheprovider tests_browser``.
+A build elsewhere: ``HW4_BOOK_HTML=/path/to/_build/html python -m pytest ... tests_browser``.
 """
 from __future__ import annotations
 
 import json
+import os
 import time
 from pathlib import Path
 from urllib.parse import urlparse
 
 import pytest
 
-HTML = Path(__file__).resolve().parent.parent / "_build" / "html"
+# the build to test: _build/html, or another build (HW4_BOOK_HTML=/path/to/html), as in conftest.py
+HTML = Path(os.environ.get("HW4_BOOK_HTML") or
+            Path(__file__).resolve().parent.parent / "_build" / "html")
 
 WIDE, NARROW, HEIGHT = 1400, 420, 1000
 PAGES = sorted(p.relative_to(HTML).as_posix() for p in HTML.rglob("*.html")
@@ -36,6 +46,8 @@ const done = arguments[arguments.length - 1];
     await MathJax.startup.promise;
   }
   out.mathjax = !!(window.MathJax && MathJax.startup && MathJax.startup.document);
+  out.mathjaxLoaded = !!window.MathJax ||
+      Array.from(document.scripts).some(s => /mathjax/i.test(s.src));
   const maths = Array.from(document.querySelectorAll("span.math, div.math"));
   out.maths = maths.length;
   out.untypeset = maths.filter(m => !m.querySelector("mjx-container")).length;
@@ -143,6 +155,8 @@ def _check_loaded(state, page):
     assert not state["brokenImages"], f"{page}: images that did not load: {state['brokenImages']}"
     assert not state["brokenVideos"], f"{page}: videos that did not load: {state['brokenVideos']}"
     assert not state["brokenPosters"], f"{page}: video stills that did not load: {state['brokenPosters']}"
+    if not state["maths"]:
+        assert not state["mathjaxLoaded"], f"{page}: loads MathJax (1.2 MB) but has no maths"
     if state["maths"]:
         assert state["mathjax"], f"{page}: has maths but MathJax did not start"
         assert state["untypeset"] == 0, f"{page}: {state['untypeset']} of {state['maths']} formulas not typeset"
@@ -236,8 +250,10 @@ def test_page_narrow(driver, book_url, shots, page):
 
 
 def test_search_from_disk_without_console_errors(driver):
-    """A reader who opens the book from disk (file://) can search it: results, no console error
-    (an excerpt would be fetched from each result's page, which Chromium refuses over file://)."""
+    """A reader who opens the book from disk (file://) can search it: results, each with a snippet
+    that shows a search term, and no console error (Sphinx would fetch each result's page for its
+    snippet, which Chromium refuses over file://; book/_static/hw4-search.js cuts it from the text
+    shipped with the search page)."""
     _viewport(driver, WIDE)
     driver.get_log("browser")
     driver.get((HTML / "search.html").as_uri() + "?q=sparse+kernel")
@@ -249,6 +265,16 @@ def test_search_from_disk_without_console_errors(driver):
         time.sleep(0.2)
     time.sleep(0.5)
     assert results, "searching the book for 'sparse kernel' found nothing"
+    snippets = driver.execute_script(
+        "return Array.from(document.querySelectorAll('#search-results li')).map(li => {"
+        "  const p = li.querySelector('p.context');"
+        "  return p ? [p.textContent, Array.from(p.querySelectorAll('.highlighted'))"
+        "             .map(h => h.textContent.toLowerCase())] : null; })")
+    missing = [i for i, s in enumerate(snippets) if not s or len(s[0]) < 40]
+    assert not missing, f"search results without a snippet: {missing} of {len(snippets)}"
+    marked = [s for s in snippets if any(h.startswith(("sparse", "kernel")) for h in s[1])]
+    assert len(marked) >= len(snippets) // 2, (
+        f"only {len(marked)} of {len(snippets)} snippets show a search term: {snippets[:3]}")
     errors = _console_errors(driver)
     assert not errors, f"search.html from disk: console errors {errors}"
 
@@ -290,3 +316,185 @@ def test_swipe_over_the_3d_view_scrolls_the_page_on_a_phone(driver, book_url):
         assert moved[1] < 20, f"{page}: with the veil lifted the swipe still scrolled ({moved[1]} px)"
     finally:
         driver.execute_cdp_cmd("Emulation.setTouchEmulationEnabled", {"enabled": False})
+
+
+# ------------------------------------------------------------------ figures, tables, page weight
+FIGURE_PAGE = "notebooks/T2_continuous_csm.html"  # maps, variance maps, resolution studies
+# [CSS px per image px] the figures are drawn at 200 dpi with 8-9 pt text (22-25 image px): at
+# this scale or more their text is at least 11 CSS px high
+READABLE = 0.5
+
+FIGURES = """
+return Array.from(document.querySelectorAll('.bd-article img'))
+  .filter(i => i.naturalWidth > 300 && i.offsetParent)
+  .map(i => {
+    const link = i.closest('a.hw4-image-link');
+    const box = i.getBoundingClientRect();
+    const button = link && link.nextElementSibling &&
+        link.nextElementSibling.matches('button.hw4-zoom-button') ? link.nextElementSibling : null;
+    const b = button && button.getBoundingClientRect();
+    return {src: i.src, linked: !!link, scale: i.clientWidth / i.naturalWidth,
+            button: !!(b && b.width > 0 && b.height > 0),
+            overlap: !!(b && b.width > 0 && b.top < box.bottom - 0.5 && b.bottom > box.top + 0.5 &&
+                        b.left < box.right - 0.5 && b.right > box.left + 0.5)};
+  });
+"""
+
+VIEWER_STATE = """
+const d = document.querySelector('dialog.hw4-zoom');
+if (!d) return null;
+const img = d.querySelector('img'), pane = d.querySelector('.hw4-zoom-pane');
+return {open: d.open, scale: img.naturalWidth ? img.clientWidth / img.naturalWidth : 0,
+        natural: img.naturalWidth, paneWidth: pane.clientWidth, scrollable: pane.scrollWidth > pane.clientWidth + 1,
+        url: location.href};
+"""
+
+
+def _wait(driver, script, ok, tries=40):
+    value = None
+    for _ in range(tries):
+        value = driver.execute_script(script)
+        if ok(value):
+            return value
+        time.sleep(0.1)
+    return value
+
+
+@pytest.mark.parametrize("width", [NARROW, WIDE])
+def test_figures_zoom_in_the_page(driver, book_url, shots, width):
+    """A figure opens in the page's viewer, at a readable scale where the column shrinks it
+    (a phone shows Task 2's maps at about a quarter of their size), with zoom buttons; Back
+    and the close button return to the page; on a phone the "Zoom" button under each figure
+    covers none of it."""
+    _viewport(driver, width)
+    state = _open(driver, book_url + FIGURE_PAGE)
+    _check_loaded(state, FIGURE_PAGE)
+    figures = driver.execute_script(FIGURES)
+    assert len(figures) >= 5, f"{FIGURE_PAGE}: expected its figures, found {len(figures)}"
+    assert all(f["linked"] for f in figures), f"figures without the viewer: {figures}"
+    if width == NARROW:
+        assert all(f["button"] for f in figures), "a figure without its Zoom button on a phone"
+        assert not any(f["overlap"] for f in figures), "a Zoom button covers its figure"
+        assert max(f["scale"] for f in figures) < READABLE  # what the viewer is for
+    else:
+        assert not any(f["button"] for f in figures), "Zoom buttons shown on a desktop"
+    page_url = driver.current_url
+    for how in ("close", "back"):
+        driver.execute_script(
+            "document.querySelectorAll('.bd-article a.hw4-image-link img')[1].scrollIntoView();"
+            "document.querySelectorAll('.bd-article a.hw4-image-link')[1].click()")
+        viewer = _wait(driver, VIEWER_STATE, lambda v: v and v["open"] and v["scale"] > 0)
+        assert viewer and viewer["open"], f"{FIGURE_PAGE}: a click on a figure opened no viewer"
+        assert viewer["url"] == page_url, f"the click left the page for {viewer['url']}"
+        fit = min(1.0, viewer["paneWidth"] / viewer["natural"])
+        assert viewer["scale"] >= min(READABLE, 1.0) or viewer["scale"] >= fit - 1e-3, (
+            f"the viewer shows the figure at {viewer['scale']:.2f} of its size")
+        if width == NARROW:
+            assert viewer["scale"] >= READABLE and viewer["scrollable"], viewer
+            driver.save_screenshot(str(shots / f"zoom_{width}.png"))
+            before = viewer["scale"]
+            driver.execute_script("document.querySelector('dialog.hw4-zoom [data-zoom=in]').click()")
+            after = driver.execute_script(VIEWER_STATE)["scale"]
+            assert after > before * 1.2, f"zoom in: {before:.2f} -> {after:.2f}"
+        if how == "close":
+            driver.execute_script("document.querySelector('dialog.hw4-zoom [data-zoom=close]').click()")
+        else:
+            driver.back()  # a phone's Back button closes the viewer, not the page
+        closed = _wait(driver, VIEWER_STATE, lambda v: v and not v["open"])
+        assert closed and not closed["open"], f"the viewer stayed open after '{how}'"
+        assert driver.current_url == page_url, f"'{how}' left the page for {driver.current_url}"
+    errors = _console_errors(driver)
+    assert not errors, f"{FIGURE_PAGE}: console errors at {width} px: {errors}"
+
+
+TABLES = """
+return Array.from(document.querySelectorAll('.bd-article .pst-scrollable-table-container'))
+  .filter(b => b.offsetParent).map(b => {
+    const w = b.parentElement;
+    const alpha = side => +getComputedStyle(w, side).opacity;
+    return {cue: w.classList.contains('hw4-scroll-cue'), wide: b.scrollWidth > b.clientWidth + 1,
+            left: alpha('::before'), right: alpha('::after')};
+  });
+"""
+
+
+@pytest.mark.parametrize("width", [NARROW, WIDE])
+@pytest.mark.parametrize("theme", ["light", "dark"])
+def test_wide_tables_show_that_they_scroll(driver, book_url, shots, width, theme):
+    """A table wider than its column shows a shade at its right edge, and at its left edge once
+    scrolled; a table that fits shows none (every chapter with tables, both colour modes)."""
+    _viewport(driver, width)
+    wide_seen = 0
+    for page in CHAPTERS:
+        _open(driver, book_url + page)
+        driver.execute_script("document.documentElement.dataset.theme = arguments[0]", theme)
+        tables = driver.execute_script(TABLES)
+        for k, t in enumerate(tables):
+            assert t["cue"], f"{page}: table {k} has no scroll cue"
+            if not t["wide"]:
+                assert t["left"] == 0 and t["right"] == 0, f"{page}: table {k} fits but shows a shade"
+                continue
+            wide_seen += 1
+            assert t["left"] == 0 and t["right"] == 1, f"{page}: wide table {k} at its start: {t}"
+            driver.execute_script(
+                "const b = document.querySelectorAll('.bd-article .pst-scrollable-table-container')"
+                "[arguments[0]]; b.scrollLeft = b.scrollWidth; b.parentElement.scrollIntoView()", k)
+            time.sleep(0.3)
+            end = driver.execute_script(TABLES)[k]
+            assert end["left"] == 1 and end["right"] == 0, f"{page}: wide table {k} at its end: {end}"
+            if wide_seen == 1:
+                driver.save_screenshot(str(shots / f"table_cue_{width}_{theme}.png"))
+    if width == NARROW:
+        assert wide_seen >= 3, f"expected wide tables on a phone, found {wide_seen}"
+
+
+# [bytes] what a page may load besides its own HTML, images, videos, 3D view and MathJax: the
+# theme's and the book's CSS, scripts and icon fonts. Measured (benchmarks/bench_html.py): 2.4 MB
+# before the trimming of book/_ext/hw4_html.py (Font Awesome's 1.5 MB script, the theme's 0.4 MB
+# CSS with every icon, the search index on every page), 0.29 MB after; the bound leaves room for
+# a few tens of KB of new style or script, not for an icon set or a framework.
+SHARED_BOUND = 400_000
+
+
+@pytest.mark.parametrize("page", PAGES)
+def test_page_weight(driver, book_url, page):
+    """Each page loads at most SHARED_BOUND bytes of shared assets (no cache), and MathJax only
+    where it has maths."""
+    _viewport(driver, WIDE)
+    driver.execute_cdp_cmd("Network.enable", {})
+    driver.execute_cdp_cmd("Network.setCacheDisabled", {"cacheDisabled": True})
+    try:
+        driver.get_log("performance")
+        driver.get(book_url + page)
+        state = driver.execute_async_script(LOAD_STATE)
+        time.sleep(0.3)
+        urls, types, frames, sizes = {}, {}, {}, {}
+        main_frame = None
+        for entry in driver.get_log("performance"):
+            msg = json.loads(entry["message"])["message"]
+            p = msg.get("params", {})
+            if msg.get("method") == "Network.requestWillBeSent":
+                urls[p["requestId"]] = p["request"]["url"]
+                frames[p["requestId"]] = p.get("frameId")
+                if main_frame is None and p.get("type") == "Document":
+                    main_frame = p.get("frameId")
+            elif msg.get("method") == "Network.responseReceived":
+                types[p["requestId"]] = p.get("type")
+            elif msg.get("method") == "Network.loadingFinished":
+                sizes[p["requestId"]] = p.get("encodedDataLength", 0)
+    finally:
+        driver.execute_cdp_cmd("Network.setCacheDisabled", {"cacheDisabled": False})
+    # the search page's own index, text and scripts are its content, not shared weight
+    search = ("searchindex.js", "searchtools.js", "language_data.js", "hw4-search")
+    shared = {urls[r]: n for r, n in sizes.items()
+              if frames.get(r) == main_frame and types.get(r) in ("Stylesheet", "Script", "Font")
+              and "/_static/mathjax/" not in urls.get(r, "")
+              and not (page == "search.html" and
+                       urls.get(r, "").rsplit("/", 1)[-1].startswith(search))}
+    mathjax = sum(n for r, n in sizes.items() if "/_static/mathjax/" in urls.get(r, ""))
+    total = sum(shared.values())
+    assert total <= SHARED_BOUND, (
+        f"{page}: {total} bytes of CSS, scripts and fonts (bound {SHARED_BOUND}): " +
+        ", ".join(f"{u.rsplit('/', 1)[-1]} {n}" for u, n in sorted(shared.items(), key=lambda x: -x[1])[:6]))
+    if not state["maths"]:
+        assert mathjax == 0, f"{page}: loads {mathjax} bytes of MathJax without maths"

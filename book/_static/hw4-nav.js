@@ -9,8 +9,13 @@
  *    992 px and collapses the primary sidebar above.
  * 2. A drawer closes when a link in it is followed: the chapter list's and the page contents'
  *    (on a phone the page would otherwise jump behind a drawer that covers most of the screen).
- * 3. Figures open their full-size file: each content image (notebook outputs, MyST figures) is
- *    wrapped in a link to its own file, reachable with the keyboard; icons and logos are not.
+ * 3. Figures zoom in the page: each content image (notebook outputs, MyST figures) is wrapped in a
+ *    link to its own file, reachable with the keyboard; icons and logos are not. A click or tap
+ *    opens the figure in a full-screen viewer at a readable size (its text about 12 CSS px high,
+ *    instead of a third of that in a phone's column), panned by dragging or swiping and zoomed with
+ *    the buttons, a pinch, Ctrl + wheel or the + / - keys; Esc, the close button or the browser's
+ *    Back closes it. A modified click (new tab) still opens the file. On a phone a "Zoom" button
+ *    under each figure says so, covering nothing.
  * 4. A display equation wider than its column gets its number on the line below (hw4-book.css),
  *    measured again when the window changes width; what is still wider scrolls in its own box.
  * 5. Line breaks: an inline formula stays on one line with the bracket before it, the unit and
@@ -22,6 +27,8 @@
  *    list, book/_ext/templates/hw4-pdf-link.html) above the theme's "print this page".
  * 8. On a touch screen the interactive 3D view sits under a veil, so that a swipe over it scrolls
  *    the page instead of turning the map; a tap lifts the veil, a touch elsewhere lowers it.
+ * 9. A table wider than its column shows that it scrolls: a shade at each edge that has more to
+ *    show (hw4-book.css), updated as it scrolls and when the window changes width.
  */
 (function () {
   "use strict";
@@ -85,6 +92,224 @@
     return number ? number.textContent.trim() : "figure";
   }
 
+  // [CSS px per image px] the viewer's first zoom on a small screen: the figures are drawn at
+  // 200 dpi with text of 8-9 pt, i.e. 22-25 image px, which this shows at 12-14 CSS px
+  var READABLE = 0.55;
+  var MAX_ZOOM = 2;
+  var zoom = null; // the viewer, made on first use
+
+  function makeViewer() {
+    var dialog = document.createElement("dialog");
+    dialog.className = "hw4-zoom";
+    dialog.setAttribute("aria-label", "Figure viewer");
+    dialog.innerHTML =
+      '<div class="hw4-zoom-bar">' +
+      '<span class="hw4-zoom-title"></span>' +
+      '<button type="button" data-zoom="out" aria-label="Zoom out" title="Zoom out (-)">\u2212</button>' +
+      '<button type="button" data-zoom="fit" aria-label="Fit the screen" title="Fit the screen (0)">Fit</button>' +
+      '<button type="button" data-zoom="in" aria-label="Zoom in" title="Zoom in (+)">+</button>' +
+      '<a class="hw4-zoom-file" target="_blank" rel="noopener" title="Open the image file">File</a>' +
+      '<button type="button" data-zoom="close" aria-label="Close" title="Close (Esc)">\u00d7</button>' +
+      '</div><div class="hw4-zoom-pane" tabindex="-1"><img alt=""></div>';
+    document.body.appendChild(dialog);
+    var pane = dialog.querySelector(".hw4-zoom-pane");
+    var img = pane.querySelector("img");
+    var state = {dialog: dialog, pane: pane, img: img, scale: 1, fit: 1, pushed: false};
+
+    function fitScale() {
+      var w = img.naturalWidth || 1, h = img.naturalHeight || 1;
+      return Math.min(1, pane.clientWidth / w, pane.clientHeight / h);
+    }
+    // zoom to `scale` keeping the image point under (px, py) [pane px] where it is
+    function setScale(scale, px, py) {
+      scale = Math.max(state.fit, Math.min(MAX_ZOOM, scale));
+      if (px === undefined) {
+        px = pane.clientWidth / 2;
+        py = pane.clientHeight / 2;
+      }
+      var x = (pane.scrollLeft + px - img.offsetLeft) / state.scale;
+      var y = (pane.scrollTop + py - img.offsetTop) / state.scale;
+      state.scale = scale;
+      img.style.width = Math.round(img.naturalWidth * scale) + "px";
+      img.style.height = Math.round(img.naturalHeight * scale) + "px";
+      pane.scrollLeft = x * scale + img.offsetLeft - px;
+      pane.scrollTop = y * scale + img.offsetTop - py;
+      dialog.dataset.scale = scale.toFixed(3);
+    }
+    state.setScale = setScale;
+    state.start = function () {
+      state.fit = fitScale();
+      state.scale = state.fit;
+      setScale(Math.max(state.fit, Math.min(1, READABLE)), 0, 0);
+      pane.scrollLeft = 0;
+      pane.scrollTop = 0;
+    };
+
+    dialog.addEventListener("click", function (event) {
+      var button = event.target.closest("button[data-zoom]");
+      if (!button) {
+        return;
+      }
+      var what = button.getAttribute("data-zoom");
+      if (what === "close") {
+        dialog.close();
+      } else if (what === "fit") {
+        setScale(state.fit);
+      } else {
+        setScale(state.scale * (what === "in" ? 1.5 : 1 / 1.5));
+      }
+    });
+    dialog.addEventListener("keydown", function (event) {
+      if (event.key === "+" || event.key === "=") {
+        setScale(state.scale * 1.5);
+      } else if (event.key === "-") {
+        setScale(state.scale / 1.5);
+      } else if (event.key === "0") {
+        setScale(state.fit);
+      } else {
+        return;
+      }
+      event.preventDefault();
+    });
+    img.addEventListener("dblclick", function (event) {
+      var r = pane.getBoundingClientRect();
+      var near = Math.abs(state.scale - state.fit) < 1e-3;
+      setScale(near ? Math.max(READABLE, state.fit * 2) : state.fit,
+               event.clientX - r.left, event.clientY - r.top);
+    });
+    pane.addEventListener("wheel", function (event) {
+      if (!event.ctrlKey) {
+        return; // a plain wheel scrolls (pans) the figure
+      }
+      event.preventDefault();
+      var r = pane.getBoundingClientRect();
+      setScale(state.scale * Math.exp(-event.deltaY / 300), event.clientX - r.left,
+               event.clientY - r.top);
+    }, {passive: false});
+    // a mouse drags the figure; touch pans natively (the pane scrolls)
+    var drag = null;
+    pane.addEventListener("pointerdown", function (event) {
+      if (event.pointerType !== "mouse" || event.button !== 0) {
+        return;
+      }
+      drag = {x: event.clientX, y: event.clientY, left: pane.scrollLeft, top: pane.scrollTop};
+      pane.classList.add("hw4-dragging");
+      event.preventDefault();
+    });
+    window.addEventListener("pointermove", function (event) {
+      if (drag) {
+        pane.scrollLeft = drag.left - (event.clientX - drag.x);
+        pane.scrollTop = drag.top - (event.clientY - drag.y);
+      }
+    });
+    window.addEventListener("pointerup", function () {
+      drag = null;
+      pane.classList.remove("hw4-dragging");
+    });
+    // two fingers pinch
+    var pinch = null;
+    function spread(touches) {
+      var r = pane.getBoundingClientRect();
+      return {d: Math.hypot(touches[0].clientX - touches[1].clientX,
+                            touches[0].clientY - touches[1].clientY),
+              x: (touches[0].clientX + touches[1].clientX) / 2 - r.left,
+              y: (touches[0].clientY + touches[1].clientY) / 2 - r.top};
+    }
+    pane.addEventListener("touchstart", function (event) {
+      if (event.touches.length === 2) {
+        pinch = {start: spread(event.touches), scale: state.scale};
+      }
+    }, {passive: true});
+    pane.addEventListener("touchmove", function (event) {
+      if (pinch && event.touches.length === 2) {
+        event.preventDefault();
+        var now = spread(event.touches);
+        setScale(pinch.scale * now.d / Math.max(1, pinch.start.d), now.x, now.y);
+      }
+    }, {passive: false});
+    pane.addEventListener("touchend", function (event) {
+      if (event.touches.length < 2) {
+        pinch = null;
+      }
+    });
+    // the browser's Back closes the viewer instead of leaving the page
+    window.addEventListener("popstate", function () {
+      if (state.leaving) {
+        state.leaving = false; // the history.back() of a viewer closed by its button
+        return;
+      }
+      if (dialog.open) {
+        state.pushed = false;
+        dialog.close();
+      }
+    });
+    dialog.addEventListener("close", function () {
+      document.documentElement.classList.remove("hw4-zoom-open");
+      img.removeAttribute("src");
+      if (state.pushed) {
+        state.pushed = false;
+        state.leaving = true;
+        history.back();
+      }
+      if (state.opener) {
+        state.opener.focus({preventScroll: true});
+      }
+    });
+    window.addEventListener("resize", function () {
+      if (dialog.open) {
+        var fit = fitScale();
+        var atFit = Math.abs(state.scale - state.fit) < 1e-3;
+        state.fit = fit;
+        setScale(atFit ? fit : state.scale);
+      }
+    });
+    return state;
+  }
+
+  function openViewer(link) {
+    var source = link.querySelector("img");
+    if (!source) {
+      return;
+    }
+    zoom = zoom || makeViewer();
+    var z = zoom;
+    z.opener = link;
+    z.dialog.querySelector(".hw4-zoom-title").textContent = figureName(source);
+    z.dialog.querySelector(".hw4-zoom-file").href = link.href;
+    z.img.alt = source.alt;
+    z.img.style.width = "";
+    z.img.style.height = "";
+    function shown() {
+      z.start();
+      z.pane.focus({preventScroll: true});
+    }
+    z.img.onload = shown;
+    z.img.src = link.getAttribute("href");
+    document.documentElement.classList.add("hw4-zoom-open");
+    z.dialog.showModal();
+    try {
+      history.pushState({hw4Zoom: true}, "");
+      z.pushed = true;
+    } catch (e) {
+      z.pushed = false; // some file:// pages refuse it; Esc and the close button still work
+    }
+    if (z.img.complete && z.img.naturalWidth) {
+      shown();
+    }
+  }
+
+  function zoomButton(link) {
+    var button = document.createElement("button");
+    button.type = "button";
+    button.className = "hw4-zoom-button";
+    button.setAttribute("aria-label", "Zoom into " + figureName(link.querySelector("img")));
+    button.textContent = "Zoom \u2922";
+    button.addEventListener("click", function () {
+      openViewer(link);
+    });
+    return button;
+  }
+
   function linkImages() {
     var images = document.querySelectorAll(
       ".bd-article figure img, .bd-article .cell_output img");
@@ -101,7 +326,55 @@
       link.setAttribute("aria-label", "Open " + figureName(img) + " at full size");
       img.parentNode.insertBefore(link, img);
       link.appendChild(img);
+      link.addEventListener("click", function (event) {
+        if (event.ctrlKey || event.metaKey || event.shiftKey || event.altKey || event.button > 0) {
+          return; // a new tab or window: the file itself
+        }
+        event.preventDefault();
+        openViewer(link);
+      });
+      link.parentNode.insertBefore(zoomButton(link), link.nextSibling);
     });
+  }
+
+  // A table (or other box) wider than its column: classes that say which edges have more to
+  // show, for the shades of hw4-book.css.
+  function scrollCues() {
+    var boxes = document.querySelectorAll(".bd-article .pst-scrollable-table-container");
+    var all = [];
+    Array.prototype.forEach.call(boxes, function (box) {
+      var wrap = document.createElement("div");
+      wrap.className = "hw4-scroll-cue";
+      box.parentNode.insertBefore(wrap, box);
+      wrap.appendChild(box);
+      var caption = box.querySelector("caption");
+      function update() {
+        // the shades start below the caption, which stays in view (sticky) and is not covered
+        wrap.style.setProperty("--hw4-cue-top", (caption ? caption.offsetHeight : 0) + "px");
+        var more = box.scrollWidth - box.clientWidth;
+        wrap.classList.toggle("hw4-more-left", more > 1 && box.scrollLeft > 1);
+        wrap.classList.toggle("hw4-more-right", more > 1 && box.scrollLeft < more - 1);
+      }
+      box.addEventListener("scroll", update, {passive: true});
+      all.push(update);
+      update();
+    });
+    var timer = null;
+    window.addEventListener("resize", function () {
+      clearTimeout(timer);
+      timer = setTimeout(function () {
+        all.forEach(function (update) {
+          update();
+        });
+      }, 100);
+    });
+    if (document.fonts && document.fonts.ready) {
+      document.fonts.ready.then(function () {
+        all.forEach(function (update) {
+          update();
+        });
+      });
+    }
   }
 
   function markWideMaths() {
@@ -301,6 +574,7 @@
     DRAWERS.forEach(closeOnLink);
     linkImages();
     keepTogether();
+    scrollCues();
     sizeVideos();
     bookPdfButton();
     veilInteractive();
