@@ -139,15 +139,17 @@ def test_task_n_is_chapter_n():
 def test_unnumbered_chapters_get_their_prefix_once():
     from types import SimpleNamespace
     ext = _ext()
-    env = SimpleNamespace(toc_fignumbers={
-        "book/background": {"figure": {"f1": (1,), "f2": (2,)}, "displaymath": {"e": (8,)}},
+    env = SimpleNamespace(found_docs={"book/background", "notebooks/T1"}, toc_fignumbers={
+        "book/background": {"figure": {"f1": (2,), "f2": (3,)}, "displaymath": {"e": (8,),
+                                                                               "d": (1,)}},
         "notebooks/T1": {"figure": {"g": (1, 1)}}})
     app = SimpleNamespace(config=SimpleNamespace(hw4_unnumbered={"book/background": "B",
                                                                  "book/references": ""}))
-    for _ in range(2):  # a second call (an incremental build) changes nothing
-        ext.prefix_unnumbered(app, env)
+    # the first call renumbers and asks for every page to be rewritten; a second changes nothing
+    assert ext.prefix_unnumbered(app, env) == ["book/background", "notebooks/T1"]
+    assert ext.prefix_unnumbered(app, env) == []
     assert env.toc_fignumbers["book/background"] == {
-        "figure": {"f1": ("B", 1), "f2": ("B", 2)}, "displaymath": {"e": ("B", 8)}}
+        "figure": {"f1": ("B", 1), "f2": ("B", 2)}, "displaymath": {"e": ("B", 2), "d": ("B", 1)}}
     assert env.toc_fignumbers["notebooks/T1"] == {"figure": {"g": (1, 1)}}
 
 

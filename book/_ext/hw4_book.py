@@ -181,14 +181,21 @@ def prefix_unnumbered(app: Sphinx, env) -> list[str]:
     Sphinx numbers the floats of a document outside every numbered toctree 1, 2, ...; with
     several such documents the numbers would repeat. ``hw4_unnumbered`` gives each a prefix
     (the PDF does the same with ``\\hwunnumbered``), so ``Eq. (B.8)`` reads the same in both."""
+    changed = False
     for docname, prefix in app.config.hw4_unnumbered.items():
         if not prefix:
             continue
         for numbers in env.toc_fignumbers.get(docname, {}).values():
-            for key, number in numbers.items():
-                if number and number[0] != prefix:
-                    numbers[key] = (prefix, number[-1])
-    return []
+            if any(number and number[0] == prefix for number in numbers.values()):
+                continue  # done on an earlier call
+            # Sphinx counts on across the unnumbered documents (the introduction's figure is 1,
+            # the background's first 2); the PDF restarts at the chapter: B.1, B.2, ...
+            order = sorted(numbers, key=lambda key: numbers[key][-1])
+            for k, key in enumerate(order, start=1):
+                numbers[key] = (prefix, k)
+            changed = True
+    # every page may cite these numbers: rewrite them all when the numbers were (re)assigned
+    return sorted(env.found_docs) if changed else []
 
 
 def mark_unnumbered(app: Sphinx, doctree: nodes.document) -> None:
