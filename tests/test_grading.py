@@ -224,6 +224,22 @@ def test_archive_links_odd_names_and_caps(tmp_path):
         archive.extract(big, tmp_path / "z")
 
 
+def test_helper_package_beside_the_task_files_imports(tmp_path):
+    sub = _sub(tmp_path, "pkg")
+    for f in sub.glob("ogm_*.py"):
+        f.unlink()
+    (sub / "helpers").mkdir()
+    (sub / "helpers" / "__init__.py").write_text("")
+    shutil.move(sub / "mapping_core.py", sub / "helpers" / "mapping_core.py")
+    (sub / "ogm_CSM.py").write_text(
+        (FIX / "exact" / "ogm_CSM.py").read_text().replace(
+            "import mapping_core", "from helpers import mapping_core"))
+    (sub / "hw4").mkdir()  # a folder named like the grader's package is not copied
+    (sub / "hw4" / "__init__.py").write_text("")
+    res = grade(sub, tmp_path / "out", grid_sizes=G)
+    assert _tests(res)[1]["score"] == 20, _tests(res)[1]["output"]
+
+
 def test_unreadable_submission_still_gets_results(tmp_path):
     bad = tmp_path / "u_hw4.tgz"
     bad.write_bytes(b"not an archive")

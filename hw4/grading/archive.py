@@ -114,7 +114,8 @@ def find_root(folder: Path) -> Path:
 
 
 def collect(root: Path, dest: Path) -> tuple[dict, list[str]]:
-    """Copy the submission's Python files (no links, no odd names) from ``root`` to ``dest``.
+    """Copy the submission's Python files and helper packages (no links, no odd names) from
+    ``root`` to ``dest``.
 
     Returns ({task: file name or None}, notes)."""
     dest.mkdir(parents=True, exist_ok=True)
@@ -122,6 +123,10 @@ def collect(root: Path, dest: Path) -> tuple[dict, list[str]]:
     for f in sorted(root.iterdir()):
         if f.is_symlink():
             notes.append(f"skipped a link: {f.name!r}")
+            continue
+        if f.is_dir() and (f / "__init__.py").is_file() and SAFE_NAME.match(f.name) \
+                and f.name != "hw4":  # a helper package of the submission
+            _copy_package(f, dest / f.name, notes)
             continue
         if not f.is_file() or not f.name.endswith(".py"):
             continue
@@ -139,3 +144,17 @@ def collect(root: Path, dest: Path) -> tuple[dict, list[str]]:
     for task, names in TASK_FILES.items():
         found[task] = next((n for n in names if (dest / n).is_file()), None)
     return found, notes
+
+
+def _copy_package(src: Path, dest: Path, notes: list, depth: int = 0) -> None:
+    """Copy a helper package's .py files and subpackages (no links, safe names, 4 levels)."""
+    if depth > 4:
+        return
+    dest.mkdir(parents=True, exist_ok=True)
+    for f in sorted(src.iterdir()):
+        if f.is_symlink() or not SAFE_NAME.match(f.name):
+            notes.append(f"skipped {src.name}/{f.name!r} (a link or an unusual name)")
+        elif f.is_dir() and (f / "__init__.py").is_file():
+            _copy_package(f, dest / f.name, notes, depth + 1)
+        elif f.is_file() and f.name.endswith(".py") and f.stat().st_size <= MAX_FILE_BYTES:
+            shutil.copyfile(f, dest / f.name)
