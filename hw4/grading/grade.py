@@ -313,9 +313,11 @@ def _figure(out: Path, task, g, grid, mean, best, semantic) -> str | None:
         return None
     ny, nx = len(grid.y), len(grid.x)
     extent = (grid.x[0] - g / 2, grid.x[-1] + g / 2, grid.y[0] - g / 2, grid.y[-1] + g / 2)
-    if semantic:
-        ref = best.ref_value.reshape(ny, nx)
-        stu = np.argmax(mean, axis=1).reshape(ny, nx)
+    if semantic:  # classes 1-6 and free space (7); cells without evidence (uniform) blank
+        observed = reference.evidence(task, g, **best.opts)[1].sum(axis=1) > 0
+        ref = np.where(observed, best.ref_value, np.nan).reshape(ny, nx)
+        uniform = np.ptp(mean, axis=1) < 1e-12
+        stu = np.where(uniform, np.nan, np.argmax(mean, axis=1)).reshape(ny, nx)
         kw = dict(cmap="tab10", vmin=0, vmax=9)
     else:
         ref = best.ref_value.reshape(ny, nx)
@@ -327,7 +329,7 @@ def _figure(out: Path, task, g, grid, mean, best, semantic) -> str | None:
         ax.set_title(f"{title}: {'most likely class' if semantic else 'mean'}")
     axes[2].imshow((~best.agree).reshape(ny, nx), origin="lower", extent=extent, cmap="Reds",
                    vmin=0, vmax=1)
-    axes[2].set_title("cells that differ (red: mean or variance)")
+    axes[2].set_title("differing cells (red)")
     for ax in axes:
         ax.set_xlabel("x [m]")
     axes[0].set_ylabel("y [m]")
