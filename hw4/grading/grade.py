@@ -84,10 +84,7 @@ class _Box:
         sandbox.make_site(box / "site")  # links into the grader's site-packages, not into /tmp
         (box / "data").mkdir()
         src = _data_file(task)
-        try:
-            os.link(src, box / "data" / src.name)
-        except OSError:
-            shutil.copyfile(src, box / "data" / src.name)
+        shutil.copyfile(src, box / "data" / src.name)  # a copy: never a link to the original
         (box / "out").mkdir()
         for d in (box, box / "support", box / "data"):
             d.chmod(0o755)
