@@ -56,7 +56,26 @@ chapter has them; without
 them, :data:`T5_FALLBACK` (the chapter's renders of the same map) stand in, as the chapter says."""
 T5_FALLBACK = ["fig-t5-kitti-3d", "fig-t5-kitti-top"]
 VIDEO = "t5_kitti04_mapping.mp4"
-"""The Task 5 mapping video the submission holds (``hw4.package.VIDEOS``)."""
+"""The Task 5 mapping video named when the chapter's video files are not there."""
+
+
+def chapter_videos(t5: dict | None = None) -> list[str]:
+    """File names of the Task 5 chapter's ``{video}`` figures whose file exists, in chapter order
+    (the submission's ``videos/`` holds them: ``hw4.package.VIDEOS``)."""
+    t5 = t5 if t5 is not None else _load(ROOT / TASKS[5])
+    names = []
+    for cell in t5["cells"]:
+        if cell["cell_type"] == "markdown":
+            for m in re.finditer(r"^```\{video\} *(\S+)", _source(cell), re.M):
+                if (_folder(5) / m.group(1)).is_file():
+                    names.append(Path(m.group(1)).name)
+    return names or [VIDEO]
+
+
+def _video_text(names: list[str]) -> str:
+    """``a``, ``a` and `b``, ``a`, `b` and `c``: the file names as inline code."""
+    code = [f"`{n}`" for n in names]
+    return code[0] if len(code) == 1 else ", ".join(code[:-1]) + " and " + code[-1]
 
 MARK = re.compile(r"^<!--\s*(figure|table):\s*(.+?)\s*-->\s*$", re.M)
 REF = re.compile(r"(?:\bof )?\{(numref|ref|eq|doc)\}`([^`]*)`")
@@ -147,12 +166,14 @@ def _folder(task: int) -> Path:
     return (ROOT / TASKS[task]).parent
 
 
-def _pick(spec: str, available: list[str]) -> list[str]:
-    """Names a marker asks for: ``A or B C`` -> A's matches if any, else B's and C's."""
+def _pick(spec: str, available: list[str], videos: frozenset = frozenset()) -> list[str]:
+    """Names a marker asks for: ``A or B C`` -> A's matches if any, else B's and C's. A pattern
+    with ``*`` matches no video (``videos``): a video is picked by its full name only."""
     for option in spec.split(" or "):
         names = []
         for pattern in option.replace(",", " ").split():
-            names += [n for n in available if fnmatch.fnmatchcase(n, pattern) and n not in names]
+            pool = [n for n in available if "*" not in pattern or n not in videos]
+            names += [n for n in pool if fnmatch.fnmatchcase(n, pattern) and n not in names]
         if names:
             return names
     return []
@@ -187,6 +208,7 @@ def _plan(task: int, text: str, nb: dict) -> list[tuple[str, str]]:
     """The report text of one task cut into ``("md", text)``, ``("figure", name)`` and
     ``("table", name)`` pieces, the markers resolved against the chapter ``nb``."""
     figures, tables = figure_cells(nb, folder=_folder(task)), _blocks(nb, "table")
+    videos = frozenset(figures) - set(figure_cells(nb, videos=False, folder=_folder(task)))
     parts = MARK.split(text)  # [text, kind, spec, text, kind, spec, ..., text]
     pieces: list[tuple[str, object]] = [("md", parts[0])]
     for i in range(1, len(parts), 3):
@@ -195,7 +217,7 @@ def _plan(task: int, text: str, nb: dict) -> list[tuple[str, str]]:
         width = re.search(r"\s+width=(\d+%)$", spec)
         if width:
             spec = spec[:width.start()]
-        names = _pick(spec, pool)
+        names = _pick(spec, pool, videos)
         if not names:
             raise InputError(f"report/task{task}.md asks for the {kind} {spec!r}, which "
                              f"{TASKS[task]} does not have.")
@@ -321,19 +343,20 @@ def build_sources(out: str | Path = SRC, name: str | None = None, root: Path = R
     report_dir = Path(report_dir or root / "report")
     out = Path(out)
     equations = background_equations(root / "book" / "background.ipynb")
+    videos = _video_text(chapter_videos(_load(root / TASKS[5])))
     books, placed, texts, nbs = {}, {}, {}, {}
     for task, rel in TASKS.items():
         text_path = report_dir / f"task{task}.md"
         if not text_path.is_file():
             raise InputError(f"{text_path} is missing: the report has one text per task.")
         nbs[task] = _load(root / rel)
-        texts[task] = text_path.read_text(encoding="utf-8").replace("{{video}}", VIDEO)
+        texts[task] = text_path.read_text(encoding="utf-8").replace("{{video}}", videos)
     names = {n.split()[0] for t in TASKS for k, n in _plan(t, texts[t], nbs[t]) if k != "md"}
     for task in TASKS:
         books[task], placed[task] = task_notebook(task, texts[task], nbs[task], equations, names)
     intro = (report_dir / "intro.md").read_text(encoding="utf-8")
     who = name or "(no name given: `python -m hw4 package --uniqname NAME` names the student)"
-    intro = intro.replace("{{student}}", who).replace("{{video}}", VIDEO)
+    intro = intro.replace("{{student}}", who).replace("{{video}}", videos)
     if out.exists():
         shutil.rmtree(out)
     out.mkdir(parents=True)
