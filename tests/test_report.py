@@ -120,3 +120,20 @@ def test_report_builds_with_every_required_figure_labelled(sources):
     assert report.missing_figures(tex) == []
     text = tex.read_text()
     assert "sphinxVerbatimInput" not in text  # no code cell input
+
+
+def test_markers_pick_figures_by_name_pattern_and_fallback():
+    avail = ["fig-a-1", "fig-a-2", "fig-a-video", "fig-b"]
+    videos = frozenset({"fig-a-video"})
+    assert report._pick("fig-a-* or fig-b", avail, videos) == ["fig-a-1", "fig-a-2"]
+    assert report._pick("fig-a-video", avail, videos) == ["fig-a-video"]  # by full name only
+    assert report._pick("fig-c-* or fig-b", avail, videos) == ["fig-b"]
+    assert report._pick("fig-c", avail, videos) == []
+
+
+def test_videos_named_are_the_chapters_that_exist():
+    t5 = {"cells": [{"cell_type": "markdown", "source": "```{video} _static/bki_mapping.mp4\n"
+                     ":name: fig-v\n\nCaption\n```\n```{video} _static/nowhere.mp4\n:name: w\n```"}]}
+    assert report.chapter_videos(t5) == ["bki_mapping.mp4"]
+    assert report.chapter_videos({"cells": []}) == [report.VIDEO]
+    assert report._video_text(["a", "b", "c"]) == "`a`, `b` and `c`"
