@@ -418,14 +418,16 @@ return Array.from(document.querySelectorAll('.bd-article .pst-scrollable-table-c
 """
 
 
-@pytest.mark.parametrize("width", [NARROW, WIDE])
-@pytest.mark.parametrize("theme", ["light", "dark"])
-def test_wide_tables_show_that_they_scroll(driver, book_url, shots, width, theme):
+@pytest.mark.parametrize("width, theme, pages", [
+    (NARROW, "light", "all"), (WIDE, "light", "all"),
+    (NARROW, "dark", ("notebooks/T2_continuous_csm.html", "notebooks/T6_evaluation_studies.html"))])
+def test_wide_tables_show_that_they_scroll(driver, book_url, shots, width, theme, pages):
     """A table wider than its column shows a shade at its right edge, and at its left edge once
-    scrolled; a table that fits shows none (every chapter with tables, both colour modes)."""
+    scrolled; a table that fits shows none (every chapter in the light mode; two chapters with
+    wide tables in the dark mode)."""
     _viewport(driver, width)
     wide_seen = 0
-    for page in CHAPTERS:
+    for page in (CHAPTERS if pages == "all" else pages):
         _open(driver, book_url + page)
         driver.execute_script("document.documentElement.dataset.theme = arguments[0]", theme)
         tables = driver.execute_script(TABLES)
@@ -445,7 +447,7 @@ def test_wide_tables_show_that_they_scroll(driver, book_url, shots, width, theme
             if wide_seen == 1:
                 driver.save_screenshot(str(shots / f"table_cue_{width}_{theme}.png"))
     if width == NARROW:
-        assert wide_seen >= 3, f"expected wide tables on a phone, found {wide_seen}"
+        assert wide_seen >= 2, f"expected wide tables on a phone, found {wide_seen}"
 
 
 # [bytes] what a page may load besides its own HTML, images, videos, 3D view and MathJax: the
