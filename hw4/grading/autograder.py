@@ -23,7 +23,8 @@ SETUP = """#!/usr/bin/env bash
 # Gradescope runs this once, as root, when it builds the autograder image (Ubuntu 22.04).
 set -euo pipefail
 SRC=${AUTOGRADER_ROOT:-/autograder}/source
-apt-get install -y -q python3.11 python3.11-venv
+apt-get update -q
+apt-get install -y -q python3.11 python3.11-venv   # Ubuntu 22.04's own Python is 3.10
 python3.11 -m venv /autograder/venv
 /autograder/venv/bin/pip install -q "$SRC"
 # the unprivileged user that runs student code (one per parallel worker; run_autograder uses 1)
