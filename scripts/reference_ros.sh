@@ -30,7 +30,7 @@ while [ $# -gt 0 ]; do
     esac
 done
 case "$OUT" in /*) ;; *) OUT=$ROOT/$OUT ;; esac
-WS=$ROOT/.ros_ws
+WS=${HW4_ROS_WS:-$ROOT/.ros_ws}   # the catkin workspace (git-ignored)
 PKG=$WS/src/semantic_bki
 PY=$ROOT/.venv/bin/python
 LOG=$OUT/logs
@@ -169,9 +169,10 @@ start_master() {
     for _ in $(seq 60); do rostopic list >/dev/null 2>&1 && return 0; sleep 0.5; done
     die "roscore did not come up (log: $LOG/roscore.log)"
 }
-stop() {  # SIGINT to a PID and wait for it (roslaunch and rosbag record finish cleanly on SIGINT)
+stop() {  # SIGINT to a PID and wait for it (roslaunch and rosbag record finish cleanly on SIGINT;
+    # roslaunch gives its nodes 15 s before it escalates)
     kill -INT "$1" 2>/dev/null || true
-    for _ in $(seq 40); do kill -0 "$1" 2>/dev/null || return 0; sleep 0.25; done
+    for _ in $(seq 100); do kill -0 "$1" 2>/dev/null || return 0; sleep 0.25; done
     kill "$1" 2>/dev/null || true
 }
 wait_for() {  # wait_for FILE PATTERN COUNT TIMEOUT: until PATTERN occurs COUNT times in FILE
@@ -253,6 +254,7 @@ if [ "$RVIZ" = 1 ]; then
         -i ":$DISP+167,307" -c:v libx264 -preset veryfast -pix_fmt yuv420p -crf 26 \
         -vf "scale=1280:-2" "$OUT/rviz_kitti04_mapping.mp4" > "$LOG/ffmpeg.log" 2>&1 &
     FF=$!
+    FF_T0=$(date +%s.%N)
     PIDS+=("$FF")
     bag_run kitti04_rviz semantickitti_node.launch "Inserted point cloud" "$NSCANS" /occupied_cells_vis_array
     grab_stable "$DISP" 167 307 1854 1056 "$OUT/rviz_kitti04.png"
@@ -298,9 +300,11 @@ if [ "$RVIZ" = 1 ]; then
         rv toy_example_node.rviz "rviz_toy_$t" "/$t" ""
     done
     stop "$LAUNCH"
-    # a strip of frames of the video for print
-    ffmpeg -loglevel error -y -i "$OUT/rviz_kitti04_mapping.mp4" \
-        -vf "fps=1/6,scale=640:-2,tile=3x2:padding=6:color=white" -frames:v 1 "$OUT/rviz_kitti04_mapping_strip.png" || true
+    # a strip of frames of the video for print: the 3D view after scans 1, 2, 4, 6, 8 and 10
+    # (the video is 1280 px wide; RViz's 3D view is the region 812 x 624 at (265, 43))
+    "$PY" -c "import sys; from hw4.bki.rosref import video_strip as v; \
+v(sys.argv[1], sys.argv[2], float(sys.argv[3]), sys.argv[4], crop='812:624:265:43')" \
+        "$OUT/rviz_kitti04_mapping.mp4" "$OUT/kitti04_rviz.bag" "$FF_T0" "$OUT/rviz_kitti04_mapping_strip.png"
 fi
 
 # ----------------------------------------------------------------------------- 7. compare
@@ -326,7 +330,7 @@ EOF
 fi
 if [ "$BOOK" = 1 ] && [ "$RVIZ" = 1 ]; then
     say "copying the screenshots and the video to notebooks/_static (t5_rviz_*)"
-    for f in "$OUT"/rviz_*.png "$OUT"/rviz_kitti04_mapping.mp4; do
+    for f in "$OUT"/rviz_kitti04*.png "$OUT"/rviz_toy_*.png "$OUT"/rviz_kitti04_mapping.mp4; do
         cp "$f" "$ROOT/notebooks/_static/t5_$(basename "$f")"
     done
     # the published maps, compactly, for the chapter's comparison (the bags are 40 MB each)

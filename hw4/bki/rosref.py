@@ -501,6 +501,31 @@ def occupied_as_reference(view) -> tuple[np.ndarray, np.ndarray]:
     return view.centres[m], view.cls[m]
 
 
+# --------------------------------------------------------------------------- video strip
+def video_strip(video, bag, t0: float, out, scans=(1, 2, 4, 6, 8, 10), crop=None,
+                topic: str = TOPICS["semantickitti"][0], tile: str = "3x2") -> Path:
+    """A strip of frames of the RViz screen recording ``video`` for print: for each scan ``k`` of
+    ``scans`` (1-based), the frame just before the node published the map of scan ``k + 1`` (RViz
+    has then drawn the map of scan ``k``; the last one 4 s after the last map). ``t0`` is the
+    wall-clock time [s since the epoch] of the video's first frame, ``bag`` the recording of the
+    same run; ``crop`` = ``"w:h:x:y"`` [px of the video]. Needs the ``ffmpeg`` program."""
+    import subprocess
+    import tempfile
+    times = [m.t for m in read_bag(bag) if m.topic == topic]
+    if not times:
+        raise InputError(f"{bag} holds no map on {topic}.")
+    at = [(times[k] - 0.3 if k < len(times) else times[-1] + 4.0) - t0 for k in scans if k <= len(times)]
+    with tempfile.TemporaryDirectory() as tmp:
+        for i, t in enumerate(at):
+            vf = (f"crop={crop}," if crop else "") + "scale=640:-2"
+            subprocess.run(["ffmpeg", "-loglevel", "error", "-y", "-ss", f"{max(t, 0):.2f}", "-i",
+                            str(video), "-frames:v", "1", "-vf", vf, f"{tmp}/f{i:02d}.png"], check=True)
+        out = Path(out)
+        subprocess.run(["ffmpeg", "-loglevel", "error", "-y", "-i", f"{tmp}/f%02d.png", "-vf",
+                        f"tile={tile}:padding=8:color=white", "-frames:v", "1", str(out)], check=True)
+    return out
+
+
 # --------------------------------------------------------------------------- RViz configurations
 def rviz_config(text: str, topics=None, view: dict | None = None, hide_docks: bool = False,
                 size=None) -> str:
