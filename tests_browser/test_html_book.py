@@ -500,3 +500,41 @@ def test_page_weight(driver, book_url, page):
         ", ".join(f"{u.rsplit('/', 1)[-1]} {n}" for u, n in sorted(shared.items(), key=lambda x: -x[1])[:6]))
     if not state["maths"]:
         assert mathjax == 0, f"{page}: loads {mathjax} bytes of MathJax without maths"
+
+
+def test_figure_viewer_pans_and_pinches_on_a_phone(driver, book_url):
+    """On a touch screen a swipe in the viewer moves the figure (not the page behind it) and two
+    fingers spread apart zoom in."""
+    _viewport(driver, NARROW)
+    driver.execute_cdp_cmd("Emulation.setTouchEmulationEnabled", {"enabled": True, "maxTouchPoints": 2})
+    try:
+        _open(driver, book_url + FIGURE_PAGE)
+        driver.execute_script("document.querySelectorAll('.bd-article button.hw4-zoom-button')[1].click()")
+        _wait(driver, VIEWER_STATE, lambda v: v and v["open"] and v["scale"] > 0)
+        where = ("const p = document.querySelector('.hw4-zoom-pane');"
+                 "return [p.scrollLeft, window.scrollY, +document.querySelector('dialog.hw4-zoom').dataset.scale]")
+
+        def touch(kind, points):
+            driver.execute_cdp_cmd("Input.dispatchTouchEvent", {
+                "type": kind, "touchPoints": [{"x": x, "y": y, "id": i} for i, (x, y) in enumerate(points)]})
+        left0, page0, scale0 = driver.execute_script(where)
+        touch("touchStart", [(300, 500)])
+        for k in range(1, 11):
+            touch("touchMove", [(300 - 20 * k, 500)])
+            time.sleep(0.02)
+        touch("touchEnd", [])
+        time.sleep(0.5)
+        left1, page1, scale1 = driver.execute_script(where)
+        assert left1 - left0 > 100, f"a swipe moved the figure by {left1 - left0} px"
+        assert page1 == page0, "a swipe in the viewer scrolled the page behind it"
+        touch("touchStart", [(180, 500), (240, 500)])
+        for k in range(1, 11):
+            touch("touchMove", [(180 - 5 * k, 500), (240 + 5 * k, 500)])
+            time.sleep(0.02)
+        touch("touchEnd", [])
+        time.sleep(0.3)
+        scale2 = driver.execute_script(where)[2]
+        assert scale2 > scale1 * 1.5, f"a pinch zoomed from {scale1} to {scale2}"
+        driver.execute_script("document.querySelector('dialog.hw4-zoom').close()")
+    finally:
+        driver.execute_cdp_cmd("Emulation.setTouchEmulationEnabled", {"enabled": False})

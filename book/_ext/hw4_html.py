@@ -154,7 +154,7 @@ def trim_icons(outdir: Path) -> None:
 
     css = ICON_RULE.sub(keep, css)
     used_classes = _used_classes(outdir)
-    css = purge_css(css, used_classes)
+    css = _purge_keeping_licences(css, used_classes)
     css = re.sub(r"/\*# sourceMappingURL=[^*]*\*/", "", css)
     # every code point a `content:` of the book's CSS can show, icons or not (a superset)
     points: set[int] = set()
@@ -183,12 +183,15 @@ def trim_icons(outdir: Path) -> None:
     # the other large style sheets every page loads
     for sheet in [static / "sphinx-design.min.css", *static.glob("mystnb.*.css")]:
         if sheet.is_file():
-            sheet.write_text(purge_css(sheet.read_text(encoding="utf-8"), used_classes),
-                             encoding="utf-8")
-    # unreferenced: the SVG-with-JavaScript bundle (its <script> is not written) and source maps
-    for name in ("fontawesome.js", "fontawesome.js.map", "fontawesome.js.LICENSE.txt"):
+            sheet.write_text(_purge_keeping_licences(sheet.read_text(encoding="utf-8"),
+                                                     used_classes), encoding="utf-8")
+    # unreferenced: the SVG-with-JavaScript bundle (its <script> is not written), and the themes'
+    # source maps (1.8 MB; only a browser's developer tools ask for them)
+    for name in ("fontawesome.js", "fontawesome.js.LICENSE.txt"):
         (static / "scripts" / name).unlink(missing_ok=True)
-    (static / "styles" / "pydata-sphinx-theme.css.map").unlink(missing_ok=True)
+    for folder in ("scripts", "styles"):
+        for source_map in (static / folder).glob("*.map"):
+            source_map.unlink()
 
 
 # ---------------------------------------------------------------------------- unused CSS
@@ -272,6 +275,12 @@ def purge_css(css: str, used: set[str]) -> str:
     return "".join(out)
 
 
+def _purge_keeping_licences(css: str, used: set[str]) -> str:
+    """``purge_css``, with the sheet's licence comments (``/*! ... */``) kept at its top."""
+    licences = re.findall(r"/\*!.*?\*/", css, flags=re.S)
+    return "\n".join(licences + [purge_css(css, used)])
+
+
 def _used_classes(outdir: Path) -> set[str]:
     """Every class of every page, and every word of the scripts the pages run (a script may
     add a class by name)."""
@@ -298,6 +307,8 @@ def _subset(ttf: Path, out: Path, points: set[int]) -> None:
     options = subset.Options()
     options.flavor = "woff"
     options.layout_features = ["*"]
+    options.name_IDs = ["*"]        # the fonts' copyright and licence records stay
+    options.name_languages = ["*"]
     font = subset.load_font(str(ttf), options)
     subsetter = subset.Subsetter(options)
     subsetter.populate(unicodes=sorted(points))
