@@ -275,15 +275,21 @@ def map_and_variance(m, axes, label: str, scale, window: str = "building"):
     the most likely class (semantic maps) in ``axes[0]`` and the variance on the logarithmic
     ``scale`` = (vmin, vmax) in ``axes[1]``, both zoomed onto ``window`` (default: the whole
     observed building, without the empty margins of the template's map). A colour bar sits under
-    each panel that needs one; returns the variance image."""
+    each panel that needs one (under a class map: its legend); returns the variance image."""
     import matplotlib as mpl
     from ..core import plotting
     fig = axes[0].figure
-    if m.map["mean"].shape[1] > 1:        # semantic: class map, its legend is the figure's
-        im = plotting.plot_semantic(m, ax=axes[0], title=f"class, {label}", legend=False)
-        # an invisible colour bar keeps the two panels the same size
-        fig.colorbar(mpl.cm.ScalarMappable(), ax=axes[0], location="bottom", shrink=0.8,
-                     aspect=30, label=" ").ax.set_visible(False)
+    if m.map["mean"].shape[1] > 1:        # semantic: class map, its legend where a colour bar goes
+        plotting.plot_semantic(m, ax=axes[0], title=f"class, {label}", legend=False)
+        # an invisible colour bar keeps the two panels the same size; the legend sits on it
+        bar = fig.colorbar(mpl.cm.ScalarMappable(), ax=axes[0], location="bottom", shrink=0.8,
+                           aspect=30, label=" ")
+        bar.solids.set_visible(False)
+        cax = bar.ax
+        cax.set_axis_off()
+        cax.legend(handles=plotting.class_handles(m.num_classes), loc="center", ncol=3,
+                   frameon=False, fontsize=8, handlelength=1.2, columnspacing=0.8,
+                   borderaxespad=0.0)
     else:
         im = plotting.plot_mean(m, ax=axes[0], title=f"mean, {label}", colorbar=False,
                                 unobserved=plotting.UNOBSERVED_LIGHT)
