@@ -80,7 +80,8 @@ if [ ! -f "$PKG/.hw4-verified" ]; then
         tar -xzf "$ROOT/../shared/upstream/$TARBALL" -C "$WS/src/extract"
     else
         say "2/7 source: downloading $URL"
-        curl -fsSL "$URL" -o "$WS/src/extract.tar.gz" || die "could not download $URL"
+        "$PY" -c "import sys, urllib.request; urllib.request.urlretrieve(sys.argv[1], sys.argv[2])" \
+            "$URL" "$WS/src/extract.tar.gz" || die "could not download $URL"
         tar -xzf "$WS/src/extract.tar.gz" -C "$WS/src/extract"
         rm -f "$WS/src/extract.tar.gz"
     fi
