@@ -372,3 +372,63 @@ def test_bad_configuration_is_one_line(tmp_path):
     r = subprocess.run([sys.executable, "-m", "hw4", "grade", str(FIX / "exact"), "--config",
                         str(cfg), "--out", str(tmp_path / "o")], capture_output=True, text=True)
     assert r.returncode == 2 and "credit_share" in r.stderr and "Traceback" not in r.stderr
+
+
+def test_attacks_links_fifo_markdown_disk_other_copies(tmp_path, capsys):
+    """Result files swapped for links / FIFOs after the wrapper wrote them, a copy of the
+    project found on disk and imported past the guard, Markdown / HTML / fences / terminal
+    escapes in the output, and a disk flood."""
+    secret = tmp_path / "secret"
+    token = uuid.uuid4().hex
+    secret.write_text(f"SECRET-{token}\n")
+    secret.chmod(0o600)
+    sub = _sub(tmp_path, "attack_c", "attacks_c", SECRET=secret,
+               PROJECT=Path(__file__).resolve().parents[1])
+    out = tmp_path / "out"
+    assert main(["grade", str(sub), "--out", str(out), "--grid-size", "1", "--timeout", "40"]) == 0
+    printed = capsys.readouterr().out
+    res = json.loads((out / "results.json").read_text())
+    _valid(res)
+    t = _tests(res)
+    report = (out / "report.md").read_text()
+    everything = json.dumps(res) + report + printed
+    assert token not in everything, "a file only the grader can read reached the report"
+    assert t[1]["score"] == 0 and "link or a special file" in t[1]["output"], t[1]["output"]
+    assert t[4]["score"] == 0 and "link or a special file" in t[4]["output"], t[4]["output"]
+    assert "\x1b" not in everything
+    assert "<img" not in report.replace("\\<img", "") and "**70" not in report.replace("\\*\\*70", "")
+    fences = [ln for ln in report.splitlines() if ln.startswith("```")]
+    assert any(len(f) > 8 for f in fences), "a line of the output can close the report's fence"
+    if STRONG:
+        assert "IMPORTED THE GRADER" not in t[2]["output"] and "import blocked" in t[2]["output"]
+        assert t[3]["score"] == 0 and "wrote more than" in t[3]["output"], t[3]["output"]
+
+
+def test_out_folder_never_overwrites_what_the_user_had(tmp_path, capsys, monkeypatch):
+    sub = tmp_path / "s"
+    sub.mkdir()
+    (sub / "ogm_CSM.py").write_text("raise SystemExit(3)\n")
+    mine = tmp_path / "mine"
+    mine.mkdir()
+    (mine / "report.md").write_text("my own notes")
+    assert main(["grade", str(sub), "--out", str(mine), "--grid-size", "1"]) == 2
+    err = capsys.readouterr().err
+    assert "did not write" in err and len(err.strip().splitlines()) == 1
+    assert (mine / "report.md").read_text() == "my own notes" and len(list(mine.iterdir())) == 1
+    out = tmp_path / "out"
+    first = grade(sub, out, grid_sizes=G)
+    (out / "figures").mkdir()
+    (out / "figures" / "task9_grid1.png").write_bytes(b"stale")
+    second = grade(sub, out, grid_sizes=G)  # an earlier run's results are replaced
+    assert json.loads((out / "results.json").read_text()) == second != {}
+    assert first["score"] == second["score"] == 0 and not (out / "figures").exists()
+    from hw4.grading import report
+
+    def broken(*a, **k):
+        raise OSError(28, "No space left on device")
+    monkeypatch.setattr(report, "write_report", broken)
+    before = (out / "results.json").read_text()
+    with pytest.raises(OSError):
+        grade(sub, out, grid_sizes=G)
+    assert sorted(p.name for p in out.iterdir()) == ["report.md", "results.json"]
+    assert (out / "results.json").read_text() == before  # a failed run left no half results

@@ -6,9 +6,12 @@ as a line in the report and 0 points for the task concerned, never as an excepti
 """
 from __future__ import annotations
 
+import io
 import json
 import os
+import re
 import shutil
+import stat
 import sys
 import tempfile
 import time
@@ -35,22 +38,53 @@ def _task_points(cfg: dict, grid_sizes: list) -> dict:
             for t in (1, 2, 3, 4) for g in grid_sizes}
 
 
-def _load_npy(path: Path):
-    if not path.is_file():
-        return None, "the map arrays were not returned"
-    if path.stat().st_size > MAX_ARRAY_BYTES:
-        return None, "the returned map is larger than any valid map"
+def _child_file(box: Path, name: str, cap: int):
+    """The bytes of ``box/out/name`` as the child left it, or (None, why not).
+
+    The child owns ``out/`` (and the scratch folder): it may have replaced a file, or ``out``
+    itself, with a link to a file only the grader can read, a hard link, a FIFO or a device.
+    Only a regular file with one link, reached without following any link, is read."""
+    flags = os.O_RDONLY | os.O_NOFOLLOW | os.O_NONBLOCK | getattr(os, "O_CLOEXEC", 0)
     try:
-        return np.load(path, allow_pickle=False), None
+        dfd = os.open(box / "out", flags | getattr(os, "O_DIRECTORY", 0))
+    except OSError:
+        return None, "the task's out/ folder was replaced"
+    try:
+        fd = os.open(name, flags, dir_fd=dfd)
+    except FileNotFoundError:
+        return None, None
+    except OSError:
+        return None, f"out/{name} was replaced by a link or a special file"
+    finally:
+        os.close(dfd)
+    try:
+        st = os.fstat(fd)
+        if not stat.S_ISREG(st.st_mode) or st.st_nlink != 1:
+            return None, f"out/{name} was replaced by a link or a special file"
+        if st.st_size > cap:
+            return None, "the returned map is larger than any valid map"
+        with os.fdopen(fd, "rb", closefd=False) as f:
+            return f.read(cap + 1)[:cap], None
+    finally:
+        os.close(fd)
+
+
+def _load_npy(box: Path, name: str):
+    data, why = _child_file(box, name, MAX_ARRAY_BYTES)
+    if data is None:
+        return None, why or "the map arrays were not returned"
+    try:
+        return np.load(io.BytesIO(data), allow_pickle=False), None
     except (ValueError, OSError, EOFError) as e:
         return None, f"the returned map is not a plain array ({type(e).__name__})"
 
 
-def _read_meta(path: Path) -> dict:
+def _read_meta(box: Path) -> dict:
+    data, _ = _child_file(box, "meta.json", 10000)
     try:
-        meta = json.loads(path.read_text()[:10000])
+        meta = json.loads(data.decode("utf-8", "replace")) if data else {}
         return meta if isinstance(meta, dict) else {}
-    except (OSError, ValueError):
+    except ValueError:
         return {}
 
 
@@ -115,13 +149,62 @@ def grade(submission: Path, out: Path, *, config: Path | None = None, grid_sizes
     if not submission.exists():
         raise InputError(f"{submission} does not exist")
     out = Path(out)
+    if out.exists() and not out.is_dir():
+        raise InputError(f"cannot write to {out}: it is a file, not a folder")
+    _refuse_foreign(out)
     try:
         out.mkdir(parents=True, exist_ok=True)
-        probe = out / ".hw4-write-test"
-        probe.write_text("")
-        probe.unlink()
+        stage = Path(tempfile.mkdtemp(prefix=".hw4-partial-", dir=out))
     except OSError as e:
         raise InputError(f"cannot write to {out}: {e.strerror}")
+    try:
+        return _grade(submission, out, stage, cfg, grid_sizes, timeout, memory, visible_only,
+                      slot, figures, hide, t_start)
+    finally:
+        shutil.rmtree(stage, ignore_errors=True)
+
+
+OURS = ("results.json", "report.md", "figures")
+
+
+def _refuse_foreign(out: Path) -> None:
+    """Refuse an output folder holding anything but an earlier run's results (never overwrite
+    what the user had)."""
+    if not out.is_dir():
+        return
+    try:
+        names = [n for n in os.listdir(out) if not n.startswith(".hw4-partial-")]
+    except OSError as e:
+        raise InputError(f"cannot read {out}: {e.strerror}")
+    if not names:
+        return
+    foreign = sorted(n for n in names if n not in OURS)
+    try:
+        earlier = json.loads((out / "results.json").read_text())["extra_data"]["hw4_grader"]
+    except (OSError, ValueError, KeyError, TypeError):
+        earlier = None
+    if foreign or not earlier:
+        what = foreign[0] if foreign else names[0]
+        raise InputError(f"{out} already holds files the grader did not write (e.g. {what}): "
+                         "choose an empty or new --out folder")
+
+
+def _publish(stage: Path, out: Path) -> None:
+    """Replace an earlier run's results with the staged ones, results.json last (so that a run
+    stopped half-way leaves no results.json beside a newer report)."""
+    (out / "results.json").unlink(missing_ok=True)
+    if (out / "figures").is_dir() and not (out / "figures").is_symlink():
+        shutil.rmtree(out / "figures")
+    else:
+        (out / "figures").unlink(missing_ok=True)
+    if (stage / "figures").is_dir():
+        (stage / "figures").replace(out / "figures")
+    (stage / "report.md").replace(out / "report.md")
+    (stage / "results.json").replace(out / "results.json")
+
+
+def _grade(submission, out, stage, cfg, grid_sizes, timeout, memory, visible_only, slot,
+           figures, hide, t_start) -> dict:
     if grid_sizes:
         visible = [float(x) for x in grid_sizes]
         hidden = []
@@ -158,7 +241,7 @@ def grade(submission: Path, out: Path, *, config: Path | None = None, grid_sizes
             vis = cfg["visibility"] if g in visible else cfg["hidden_visibility"]
             for task in (1, 2, 3, 4):
                 test = _grade_one(task, g, cfg, found, box_maker, slot, hide, timeout, memory,
-                                  points[(task, g)], out, figures)
+                                  points[(task, g)], stage, figures)
                 test["visibility"] = vis
                 tests.append(test)
     finally:
@@ -176,10 +259,9 @@ def grade(submission: Path, out: Path, *, config: Path | None = None, grid_sizes
                        "grader_error": any(t.get("_grader_error") for t in tests)},
     }
     from .report import write_report
-    write_report(out, results, tests, notes, sizes, cfg, iso)
-    tmp = out / ".results.json.tmp"
-    tmp.write_text(json.dumps(results, indent=1))
-    tmp.replace(out / "results.json")
+    write_report(stage, results, tests, notes, sizes, cfg, iso)
+    (stage / "results.json").write_text(json.dumps(results, indent=1))
+    _publish(stage, out)
     return results
 
 
@@ -203,6 +285,27 @@ def _summary(total, max_total, sizes, notes) -> str:
     return "\n".join(lines)
 
 
+_CONTROL = re.compile(r"[\x00-\x08\x0b-\x1f\x7f-\x9f\u200b-\u200f\u202a-\u202e\u2066-\u2069]")
+_MD_SPECIAL = re.compile(r"([\\`*_\[\]<>|#!~&])")
+
+
+def _plain(text: str) -> str:
+    """``text`` without control characters (terminal escapes, carriage returns, bidi marks)."""
+    return _CONTROL.sub("", text)
+
+
+def _md_escape(text: str) -> str:
+    """``text`` shown literally in Markdown (no emphasis, links, images, HTML or tables)."""
+    return _MD_SPECIAL.sub(r"\\\1", text)
+
+
+def _fenced(text: str) -> str:
+    """``text`` as a Markdown code block whose fence no line of ``text`` can close."""
+    longest = max((len(m) for m in re.findall(r"`+|~+", text)), default=0)
+    fence = "`" * max(3, longest + 1)
+    return f"{fence}\n{text}\n{fence}"
+
+
 def _grade_one(task, g, cfg, found, box_maker, slot, hide, timeout, memory, pts, out, figures):
     name = f"Task {task} ({cfg['tasks'][task]['name']}) at grid size {g:g} m"
     test = {"name": name, "score": 0.0, "max_score": round(pts, 4), "status": "failed",
@@ -217,17 +320,20 @@ def _grade_one(task, g, cfg, found, box_maker, slot, hide, timeout, memory, pts,
     test["_seconds"] = round(res.seconds, 1)
     test["_isolation"] = res.notes
     logs = ""
-    if res.stdout.strip():
-        logs += f"\n\nstdout (capped):\n```\n{res.stdout.strip()[-2000:]}\n```"
-    if res.stderr.strip():
-        logs += f"\n\nstderr (capped):\n```\n{res.stderr.strip()[-2000:]}\n```"
-    err = (box / "out" / "error.txt")
+    for label, text in (("stdout", res.stdout), ("stderr", res.stderr)):
+        if text.strip():
+            logs += f"\n\n{label} (capped):\n{_fenced(_plain(text.strip()[-2000:]))}"
+    err, err_why = _child_file(box, "error.txt", 2000)
     reason = None
     if res.timed_out:
         reason = (f"timed out: the task did not finish within {timeout or cfg['timeout']:g} s "
                   "(a loop that never ends, or a solution far slower than the template)")
-    elif err.is_file():
-        reason = err.read_text(errors="replace")[:600].strip()
+    elif res.disk_exceeded:
+        reason = f"stopped: the task {res.disk_exceeded} (the limit of its scratch folder)"
+    elif err_why:
+        reason = err_why
+    elif err is not None:
+        reason = _md_escape(_plain(err.decode("utf-8", "replace")[:600]).strip())
         if reason.startswith("grader setup:"):  # written by the wrapper before any student code
             test["_grader_error"] = True
             reason = ("the GRADER could not run this task, not the submission's fault (ask the "
@@ -239,10 +345,10 @@ def _grade_one(task, g, cfg, found, box_maker, slot, hide, timeout, memory, pts,
         reason = why or f"the task's process ended with status {res.returncode}"
     mean = var = None
     if reason is None:
-        mean, reason = _load_npy(box / "out" / "mean.npy")
+        mean, reason = _load_npy(box, "mean.npy")
     if reason is None:
-        var, reason = _load_npy(box / "out" / "variance.npy")
-    meta = _read_meta(box / "out" / "meta.json") if reason is None else {}
+        var, reason = _load_npy(box, "variance.npy")
+    meta = _read_meta(box) if reason is None else {}
     semantic = task > 2
     grid, _ = reference.evidence(task, g)
     if reason is None:

@@ -64,6 +64,8 @@ class Limits:
     fsize_mb: int = 64
     nofile: int = 256
     output_cap: int = 8000
+    disk_mb: int = 256      # all the files the task writes in its scratch folder
+    disk_files: int = 5000  # and their number (folders included)
 
 
 @dataclass
@@ -76,6 +78,7 @@ class Result:
     stderr: str
     leftovers_killed: int = 0
     notes: list = field(default_factory=list)
+    disk_exceeded: str | None = None
 
 
 def is_root() -> bool:
@@ -264,6 +267,13 @@ def run(argv: list, scratch: Path, limits: Limits, *, user: tuple | None = None,
     if user is None and not is_root() and os.path.isdir("/proc"):  # NPROC counts all our uid's
         nproc += sum(1 for d in os.listdir("/proc") if d.isdigit()
                      and _owner(d) == os.getuid())
+    site_links, top_hide = [], []
+    if use_ns:
+        argv = [os.path.realpath(argv[0]), *argv[1:]]
+        if (scratch / "site").is_dir():
+            site_links = [(e.name, os.path.realpath(e)) for e in sorted((scratch / "site").iterdir())
+                          if e.is_symlink() and os.path.isdir(e)]
+        top_hide = _tops_to_hide(argv[0])
     cpu = int(limits.timeout) + 5
     mem = int(limits.memory_mb) * 2**20
 
@@ -274,6 +284,13 @@ def run(argv: list, scratch: Path, limits: Limits, *, user: tuple | None = None,
             _check(libc.mount(b"none", b"/", None, MS_REC | MS_PRIVATE, None), "mount private")
             _check(libc.mount(str(scratch).encode(), ANCHOR.encode(), None, MS_BIND | MS_REC,
                               None), "bind scratch")
+            if site_links:  # the packages, reached through links that the hiding below cuts
+                site = f"{ANCHOR}/site"
+                libc.mount(b"tmpfs", site.encode(), b"tmpfs", MS_NOSUID | MS_NODEV, b"size=64k")
+                for name, src in site_links:
+                    os.mkdir(f"{site}/{name}")
+                    _check(libc.mount(src.encode(), f"{site}/{name}".encode(), None,
+                                      MS_BIND | MS_REC, None), f"bind {name}")
             for d in ("/tmp", "/var/tmp", "/dev/shm"):
                 if os.path.isdir(d):
                     libc.mount(b"tmpfs", d.encode(), b"tmpfs", MS_NOSUID | MS_NODEV,
@@ -282,6 +299,9 @@ def run(argv: list, scratch: Path, limits: Limits, *, user: tuple | None = None,
                 if os.path.isdir(d):
                     libc.mount(b"tmpfs", d.encode(), b"tmpfs", MS_RDONLY | MS_NOSUID | MS_NODEV,
                                b"size=4k,mode=0555")
+            for d in top_hide:  # everything but the system: other copies of the project, /run
+                libc.mount(b"tmpfs", d.encode(), b"tmpfs", MS_RDONLY | MS_NOSUID | MS_NODEV,
+                           b"size=4k,mode=0555")
             os.chdir(ANCHOR)
         else:
             os.chdir(scratch)
@@ -307,10 +327,19 @@ def run(argv: list, scratch: Path, limits: Limits, *, user: tuple | None = None,
     with open(out_path, "wb") as fo, open(err_path, "wb") as fe:
         proc = subprocess.Popen(argv, stdin=subprocess.DEVNULL, stdout=fo, stderr=fe, env=env,
                                 preexec_fn=preexec, start_new_session=True, close_fds=True)
-        try:
-            proc.wait(timeout=limits.timeout)
-        except subprocess.TimeoutExpired:
-            timed_out = True
+        disk = None
+        while True:  # the wall clock, and the disk the scratch folder takes (checked 4 times a s)
+            left = t0 + limits.timeout - time.monotonic()
+            try:
+                proc.wait(timeout=max(0.0, min(0.25, left)))
+                break
+            except subprocess.TimeoutExpired:
+                if left <= 0.25:
+                    timed_out = True
+                    break
+                disk = _disk_over(scratch, limits)
+                if disk:
+                    break
     seconds = time.monotonic() - t0
     try:
         os.killpg(proc.pid, signal.SIGKILL)
@@ -324,9 +353,56 @@ def run(argv: list, scratch: Path, limits: Limits, *, user: tuple | None = None,
         _kill_user(*user)
     res = Result(None if timed_out else proc.returncode, timed_out, seconds,
                  _read_capped(out_path, limits.output_cap), _read_capped(err_path, limits.output_cap),
-                 killed, notes)
+                 killed, notes, disk)
     shutil.rmtree(logs, ignore_errors=True)
     return res
+
+
+def _disk_over(scratch: Path, limits: Limits) -> str | None:
+    """Why the files in ``scratch`` exceed the task's disk limits, or None."""
+    used, count = 0, 0
+    stack = [str(scratch)]
+    while stack:
+        try:
+            it = os.scandir(stack.pop())
+        except OSError:
+            continue
+        with it:
+            for e in it:
+                count += 1
+                if count > limits.disk_files:
+                    return f"wrote more than {limits.disk_files} files"
+                try:
+                    st = e.stat(follow_symlinks=False)
+                except OSError:
+                    continue
+                used += st.st_blocks * 512
+                if used > limits.disk_mb * 2**20:
+                    return f"wrote more than {limits.disk_mb} MB of files"
+                if e.is_dir(follow_symlinks=False):
+                    stack.append(e.path)
+    return None
+
+
+SYSTEM_TOPS = ("usr", "lib", "lib32", "lib64", "libx32", "bin", "sbin", "etc", "proc", "dev",
+               "sys", "tmp")
+
+
+def _tops_to_hide(interpreter: str) -> list:
+    """The top-level folders hidden from the child: all but the system's, the interpreter's
+    (its standard library) and the scratch anchor. The child's packages are bound into its
+    scratch folder, so no copy of this project (a checkout, a virtual environment, Gradescope's
+    /autograder) and no host service socket (/run) stays readable."""
+    keep = set(SYSTEM_TOPS) | {ANCHOR.strip("/").split("/")[0]}
+    parts = Path(os.path.realpath(interpreter)).parts
+    if len(parts) > 1:
+        keep.add(parts[1])
+    out = []
+    for name in sorted(os.listdir("/")):
+        path = "/" + name
+        if name not in keep and os.path.isdir(path) and not os.path.islink(path):
+            out.append(path)
+    return out
 
 
 def _owner(pid: str) -> int:
