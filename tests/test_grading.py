@@ -21,6 +21,7 @@ import zipfile
 from pathlib import Path
 
 import jsonschema
+import numpy as np
 import pytest
 
 from hw4.__main__ import main
@@ -432,3 +433,48 @@ def test_out_folder_never_overwrites_what_the_user_had(tmp_path, capsys, monkeyp
         grade(sub, out, grid_sizes=G)
     assert sorted(p.name for p in out.iterdir()) == ["report.md", "results.json"]
     assert (out / "results.json").read_text() == before  # a failed run left no half results
+
+
+def test_returned_files_are_read_only_when_plain(tmp_path):
+    """What the child leaves in out/ is read without following links, never from a FIFO, a
+    hard link or a header that claims more data than it holds (40 GB would be allocated)."""
+    from hw4.grading.grade import _load_npy
+    box = tmp_path / "box"
+    (box / "out").mkdir(parents=True)
+    o = box / "out"
+    buf = io.BytesIO()
+    np.save(buf, np.arange(6.0))
+    (o / "good.npy").write_bytes(buf.getvalue())
+    assert np.array_equal(_load_npy(box, "good.npy")[0], np.arange(6.0))
+    head = io.BytesIO()
+    np.lib.format.write_array_header_1_0(head, {"descr": "<f8", "fortran_order": False,
+                                                "shape": (5 * 10**9,)})
+    (o / "huge.npy").write_bytes(head.getvalue() + bytes(64))
+    os.mkfifo(o / "fifo.npy")
+    (o / "link.npy").symlink_to(o / "good.npy")
+    os.link(o / "good.npy", o / "hard.npy")
+    obj = io.BytesIO()
+    np.save(obj, np.array([1, None], dtype=object), allow_pickle=True)
+    (o / "obj.npy").write_bytes(obj.getvalue())
+    for name in ("huge.npy", "fifo.npy", "link.npy", "hard.npy", "obj.npy", "missing.npy"):
+        arr, why = _load_npy(box, name)
+        assert arr is None and why, name
+    shutil.rmtree(o)
+    (box / "elsewhere").mkdir()
+    (box / "elsewhere" / "good.npy").write_bytes(buf.getvalue())
+    o.symlink_to(box / "elsewhere")  # out/ itself swapped for a link
+    assert _load_npy(box, "good.npy")[0] is None
+
+
+def test_notes_on_names_are_escaped_and_several_folders_said(tmp_path):
+    sub = tmp_path / "two"
+    for d, f in (("a", "ogm_CSM.py"), ("b", "ogm_S_CSM.py")):
+        (sub / d).mkdir(parents=True)
+        (sub / d / f).write_text("raise SystemExit(3)\n")
+    res = grade(sub, tmp_path / "o", grid_sizes=G)
+    assert "graded a" in res["output"] and "not b" in res["output"]
+    arc = _tar(tmp_path / "u.tgz", [("u/**x** <b>y</b>.py", "file", b"x"),
+                                   ("u/ogm_CSM.py", "file", b"raise SystemExit(3)\n")])
+    res = grade(arc, tmp_path / "o2", grid_sizes=G)
+    assert "unusual name" in res["output"] and "<b>" not in res["output"]
+    assert "**x**" not in (tmp_path / "o2" / "report.md").read_text()

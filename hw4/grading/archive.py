@@ -99,8 +99,9 @@ def extract(archive: Path, dest: Path) -> list[str]:
     return notes
 
 
-def find_root(folder: Path) -> Path:
-    """The folder holding the task files: ``folder`` itself or its one subfolder that has them."""
+def find_root(folder: Path, notes: list | None = None) -> Path:
+    """The folder holding the task files: ``folder`` itself or its one subfolder that has them
+    (of several: the one with the most task files, said in ``notes``)."""
     def score(d):
         return sum(any((d / f).is_file() for f in names) for names in TASK_FILES.values())
     if score(folder):
@@ -110,7 +111,12 @@ def find_root(folder: Path) -> Path:
     if not cands:
         raise InputError("no task file (ogm_CSM.py, ogm_continuous_CSM.py, ogm_S_CSM.py, "
                          "ogm_continuous_S_CSM.py) found in the submission")
-    return max(cands, key=lambda d: (score(d), -len(d.parts)))
+    best = max(cands, key=lambda d: (score(d), -len(d.parts)))
+    if len(cands) > 1 and notes is not None:
+        others = ", ".join(str(d.relative_to(folder)) for d in cands if d != best)
+        notes.append(f"task files are in several folders: graded {best.relative_to(folder)} "
+                     f"(the one with the most), not {others}")
+    return best
 
 
 def collect(root: Path, dest: Path) -> tuple[dict, list[str]]:

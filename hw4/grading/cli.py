@@ -3,6 +3,7 @@ from __future__ import annotations
 
 import argparse
 import os
+import re
 from pathlib import Path
 
 from ..core.errors import InputError
@@ -66,6 +67,7 @@ def register(sub) -> None:
 def _print_results(results: dict, out: Path) -> None:
     for t in results["tests"]:
         first = t["output"].splitlines()[0] if t["output"] else ""
+        first = re.sub(r"\\([\\`*_\[\]<>|#!~&])", r"\1", first)  # the report's Markdown escapes
         print(f"{t['name']}: {t['score']:g} / {t['max_score']:g}  {first}")
     total = sum(t["max_score"] for t in results["tests"])
     print(f"score {results['score']:g} / {total:g}; report: {out / 'report.md'}")

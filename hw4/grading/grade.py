@@ -73,9 +73,20 @@ def _load_npy(box: Path, name: str):
     data, why = _child_file(box, name, MAX_ARRAY_BYTES)
     if data is None:
         return None, why or "the map arrays were not returned"
-    try:
+    fmt = np.lib.format
+    try:  # the header's shape must match the bytes that follow (a claimed 40 GB would be
+        # allocated before reading)
+        bio = io.BytesIO(data)
+        version = fmt.read_magic(bio)
+        read = fmt.read_array_header_1_0 if version == (1, 0) else fmt.read_array_header_2_0
+        shape, _, dtype = read(bio)
+        n = 1
+        for k in shape:
+            n *= int(k)
+        if dtype.hasobject or n * dtype.itemsize != len(data) - bio.tell():
+            return None, "the returned map is not a plain array (its header does not match its data)"
         return np.load(io.BytesIO(data), allow_pickle=False), None
-    except (ValueError, OSError, EOFError) as e:
+    except (ValueError, OSError, EOFError, TypeError, MemoryError) as e:
         return None, f"the returned map is not a plain array ({type(e).__name__})"
 
 
@@ -227,9 +238,9 @@ def _grade(submission, out, stage, cfg, grid_sizes, timeout, memory, visible_onl
             if archive.is_archive(submission):
                 raw = base / "raw"
                 notes += archive.extract(submission, raw)
-                root = archive.find_root(raw)
+                root = archive.find_root(raw, notes)
             elif submission.is_dir():
-                root = archive.find_root(submission)
+                root = archive.find_root(submission, notes)
             else:
                 raise InputError(f"{submission.name} is neither a folder nor a .tgz/.tar.gz/.zip archive")
             found, more = archive.collect(root, pristine)
@@ -281,7 +292,7 @@ def _safe_to_hide(paths) -> tuple:
 def _summary(total, max_total, sizes, notes) -> str:
     lines = [f"Code score: {total:g} / {max_total:g} points (tasks 1-4, graded at "
              f"{', '.join(f'{g:g} m' for g in sizes)}; the written parts are graded by the TA)."]
-    lines += [f"- {n}" for n in notes]
+    lines += [f"- {_md_escape(_plain(n))}" for n in notes]  # notes quote the submission's names
     return "\n".join(lines)
 
 
@@ -357,8 +368,9 @@ def _grade_one(task, g, cfg, found, box_maker, slot, hide, timeout, memory, pts,
             reason = arrs
         else:
             mean, var = arrs
-    if res.leftovers_killed:
-        test["output"] += f"{res.leftovers_killed} process(es) left running by the task were killed.\n"
+    if res.leftovers_killed:  # after the result line ("0 points: ..." first, for grades.csv)
+        logs = (f"\n\n{res.leftovers_killed} process(es) left running by the task were killed."
+                + logs)
     if reason is not None:
         test["output"] += f"0 points: {reason}.{logs}"
         test["_reason"] = reason.splitlines()[0][:200]
