@@ -423,7 +423,7 @@ return Array.from(document.querySelectorAll('.bd-article .pst-scrollable-table-c
     (NARROW, "dark", ("notebooks/T2_continuous_csm.html", "notebooks/T6_evaluation_studies.html"))])
 def test_wide_tables_show_that_they_scroll(driver, book_url, shots, width, theme, pages):
     """A table wider than its column shows a shade at its right edge, and at its left edge once
-    scrolled; a table that fits shows none (every chapter in the light mode; two chapters with
+    scrolled, and so does a code cell at its right edge; a table or code cell that fits shows none (every chapter in the light mode; two chapters with
     wide tables in the dark mode)."""
     _viewport(driver, width)
     wide_seen = 0
@@ -446,6 +446,15 @@ def test_wide_tables_show_that_they_scroll(driver, book_url, shots, width, theme
             assert end["left"] == 1 and end["right"] == 0, f"{page}: wide table {k} at its end: {end}"
             if wide_seen == 1:
                 driver.save_screenshot(str(shots / f"table_cue_{width}_{theme}.png"))
+        code = driver.execute_script(
+            "return Array.from(document.querySelectorAll('.bd-article div.highlight > :not(button)'))"
+            ".filter(w => w.checkVisibility()).map(w => { const b = w.querySelector('pre') || w;"
+            "  return [w.classList.contains('hw4-scroll-cue'), b.scrollWidth > b.clientWidth + 1,"
+            "          +getComputedStyle(w, '::after').opacity]; })")
+        # (a cell folded away in a closed <details> is not drawn, nor is its shade)
+        assert all(c[0] for c in code), f"{page}: code cells without a scroll cue"
+        assert all(c[2] == (1 if c[1] else 0) for c in code), (
+            f"{page}: code cells whose right shade does not match their width: {code}")
     if width == NARROW:
         assert wide_seen >= 2, f"expected wide tables on a phone, found {wide_seen}"
 

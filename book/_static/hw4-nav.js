@@ -27,8 +27,8 @@
  *    list, book/_ext/templates/hw4-pdf-link.html) above the theme's "print this page".
  * 8. On a touch screen the interactive 3D view sits under a veil, so that a swipe over it scrolls
  *    the page instead of turning the map; a tap lifts the veil, a touch elsewhere lowers it.
- * 9. A table wider than its column shows that it scrolls: a shade at each edge that has more to
- *    show (hw4-book.css), updated as it scrolls and when the window changes width.
+ * 9. A table or code cell wider than its column shows that it scrolls: a shade at each edge that
+ *    has more to show (hw4-book.css), updated as it scrolls and when the window changes width.
  */
 (function () {
   "use strict";
@@ -337,10 +337,11 @@
     });
   }
 
-  // A table (or other box) wider than its column: classes that say which edges have more to
-  // show, for the shades of hw4-book.css.
+  // A table or code cell wider than its column: classes that say which edges have more to
+  // show, for the shades of hw4-book.css, which fade into the box's own background.
   function scrollCues() {
-    var boxes = document.querySelectorAll(".bd-article .pst-scrollable-table-container");
+    var boxes = document.querySelectorAll(
+      ".bd-article .pst-scrollable-table-container, .bd-article div.highlight > pre");
     var all = [];
     Array.prototype.forEach.call(boxes, function (box) {
       var wrap = document.createElement("div");
@@ -351,11 +352,19 @@
       function update() {
         // the shades start below the caption, which stays in view (sticky) and is not covered
         wrap.style.setProperty("--hw4-cue-top", (caption ? caption.offsetHeight : 0) + "px");
+        var bg = getComputedStyle(box).backgroundColor;
+        if (bg && !/^(transparent|rgba\(0, 0, 0, 0\))$/.test(bg)) {
+          wrap.style.setProperty("--hw4-cue-bg", bg);
+        }
         var more = box.scrollWidth - box.clientWidth;
         wrap.classList.toggle("hw4-more-left", more > 1 && box.scrollLeft > 1);
         wrap.classList.toggle("hw4-more-right", more > 1 && box.scrollLeft < more - 1);
       }
       box.addEventListener("scroll", update, {passive: true});
+      if (window.ResizeObserver) {
+        // also when a folded cell is unfolded (the box then gets its width for the first time)
+        new ResizeObserver(update).observe(box);
+      }
       all.push(update);
       update();
     });
