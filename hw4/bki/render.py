@@ -202,13 +202,18 @@ def topdown(view: MapView, mask: np.ndarray, values: np.ndarray | None = None, l
     return img.reshape(shape), extent
 
 
+EMPTY = (0.80, 0.82, 0.86)
+"""Colour of a top view's columns without a voxel: a blue-grey that prints clearly darker than the
+paper (a light grey there read as the page itself) and is no class's colour."""
+
+
 def class_image(img: np.ndarray, num_class: int, present=None) -> np.ndarray:
-    """RGB image (H, W, 3) in [0, 1] of a class image from :func:`topdown` (empty = light grey);
+    """RGB image (H, W, 3) in [0, 1] of a class image from :func:`topdown` (empty = :data:`EMPTY`);
     ``present``: the classes the whole figure shows (default: those of ``img``), which decide the
     palette (:func:`hw4.bki.palette.class_colors`)."""
     if present is None:
         present = np.unique(img[img >= 0])
-    pal = np.vstack([class_colors(num_class, present) / 255.0, [[0.92, 0.92, 0.92]]])
+    pal = np.vstack([class_colors(num_class, present) / 255.0, [EMPTY]])
     return pal[np.where(img < 0, num_class, img)]
 
 
@@ -408,7 +413,7 @@ def plot_topdown(views: dict, cam: Camera, colour: str = "class", which: str = "
                       interpolation="nearest")
         else:
             img, ext = topdown(v, m, values=v.variance, lo=cam.lo[:2], hi=cam.hi[:2])
-            ax.set_facecolor((0.92, 0.92, 0.92))
+            ax.set_facecolor(EMPTY)
             im = ax.imshow(img, origin="lower", extent=ext, cmap="viridis",
                            norm=variance_norm(vmax, log_variance, vmin),
                            interpolation="nearest")

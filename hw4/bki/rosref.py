@@ -502,11 +502,12 @@ def occupied_as_reference(view) -> tuple[np.ndarray, np.ndarray]:
 
 
 # --------------------------------------------------------------------------- video strip
-def video_strip(video, bag, t0: float, out, scans=(1, 2, 4, 6, 8, 10), crop=None,
+def video_strip(video, bag, t0: float, out, scans=(2, 3, 4, 6, 8, 10), crop=None,
                 topic: str = TOPICS["semantickitti"][0], tile: str = "3x2") -> Path:
     """A strip of frames of the RViz screen recording ``video`` for print: for each scan ``k`` of
     ``scans`` (1-based), the frame just before the node published the map of scan ``k + 1`` (RViz
-    has then drawn the map of scan ``k``; the last one 4 s after the last map). ``t0`` is the
+    has then drawn the map of scan ``k``; the last one 4 s after the last map; RViz, starting up, may
+    not have drawn the first map before the second arrives, hence no scan 1). ``t0`` is the
     wall-clock time [s since the epoch] of the video's first frame, ``bag`` the recording of the
     same run; ``crop`` = ``"w:h:x:y"`` [px of the video]. Needs the ``ffmpeg`` program."""
     import subprocess
