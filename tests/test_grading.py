@@ -478,3 +478,41 @@ def test_notes_on_names_are_escaped_and_several_folders_said(tmp_path):
     res = grade(arc, tmp_path / "o2", grid_sizes=G)
     assert "unusual name" in res["output"] and "<b>" not in res["output"]
     assert "**x**" not in (tmp_path / "o2" / "report.md").read_text()
+
+
+@pytest.mark.skipif(not sandbox.is_root(), reason="the total is counted per sandbox user")
+def test_memory_spread_over_forks_is_stopped(tmp_path):
+    sub = tmp_path / "mem"
+    sub.mkdir()
+    shutil.copyfile(FIX / "attacks_d" / "ogm_CSM.py", sub / "ogm_CSM.py")
+    res = grade(sub, tmp_path / "out", grid_sizes=G, timeout=25, memory=400)
+    out = _tests(res)[1]["output"]
+    assert "more than 400 MB of memory" in out, out
+
+
+def test_autograder_zip_never_overwrites_another_file(tmp_path, capsys):
+    mine = tmp_path / "autograder.zip"
+    mine.write_text("my notes")
+    assert main(["autograder", "--out", str(mine)]) == 2
+    assert "not an earlier autograder zip" in capsys.readouterr().err
+    assert mine.read_text() == "my notes" and len(list(tmp_path.iterdir())) == 1
+
+
+@pytest.mark.skipif(not sandbox.is_root(), reason="one grading user per grader needs root")
+def test_two_graders_at_once_do_not_kill_each_others_tasks(tmp_path):
+    slow = tmp_path / "slow"
+    slow.mkdir()
+    (slow / "ogm_CSM.py").write_text("import time\ntime.sleep(8)\nraise SystemExit(7)\n")
+    quick = tmp_path / "quick"
+    quick.mkdir()
+    (quick / "ogm_CSM.py").write_text("raise SystemExit(3)\n")
+    other = subprocess.Popen([sys.executable, "-m", "hw4", "grade", str(slow), "--out",
+                              str(tmp_path / "o_slow"), "--grid-size", "1"],
+                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    import time
+    time.sleep(4)
+    for k in range(3):  # each run kills every process of its user when its task ends
+        grade(quick, tmp_path / f"o_quick{k}", grid_sizes=G)
+    out, err = other.communicate(timeout=300)
+    res = json.loads((tmp_path / "o_slow" / "results.json").read_text())
+    assert "SystemExit" in _tests(res)[1]["output"], _tests(res)[1]["output"]

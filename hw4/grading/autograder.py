@@ -54,9 +54,17 @@ def build_zip(out: Path, config: Path | None = None) -> Path:
     cfg_path = Path(config) if config else DEFAULT
     load_config(cfg_path)  # refuse a broken configuration now, not on Gradescope
     out = Path(out)
+    if out.exists() or out.is_symlink():  # replace only an earlier autograder zip
+        try:
+            with zipfile.ZipFile(out) as z:
+                ours = "run_autograder" in z.namelist() and not out.is_symlink()
+        except (OSError, zipfile.BadZipFile):
+            ours = False
+        if not ours:
+            raise InputError(f"{out} exists and is not an earlier autograder zip: choose another --out")
+    tmp = out.with_name(out.name + ".tmp")
     try:
         out.parent.mkdir(parents=True, exist_ok=True)
-        tmp = out.with_name(out.name + ".tmp")
         with zipfile.ZipFile(tmp, "w", zipfile.ZIP_DEFLATED) as z:
             def add_text(name, text, mode=0o755):
                 info = zipfile.ZipInfo(name)
@@ -76,5 +84,6 @@ def build_zip(out: Path, config: Path | None = None) -> Path:
                 z.write(_data.ensure(name), f"data/{name}")
         tmp.replace(out)
     except OSError as e:
+        tmp.unlink(missing_ok=True)
         raise InputError(f"cannot write {out}: {e.strerror}")
     return out

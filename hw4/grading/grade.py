@@ -140,11 +140,11 @@ def _run_task(box: Path, task: int, g: float, cfg: dict, slot: int, hide: tuple,
               memory=None):
     limits = sandbox.Limits(timeout=timeout or cfg["timeout"], memory_mb=memory or cfg["memory"],
                             output_cap=cfg["output_cap"])
-    user = sandbox.ensure_user(slot)
-    py = sandbox.child_python(user is not None)
-    data_rel = f"data/{_data_file(task).name}"
-    argv = [py, "-I", "-S", "child.py", str(task), repr(g), data_rel, "site"]
-    return sandbox.run(argv, box, limits, user=user, hide=hide, writable=("sub", "out"))
+    with sandbox.exclusive_user(slot) as user:
+        py = sandbox.child_python(user is not None)
+        data_rel = f"data/{_data_file(task).name}"
+        argv = [py, "-I", "-S", "child.py", str(task), repr(g), data_rel, "site"]
+        return sandbox.run(argv, box, limits, user=user, hide=hide, writable=("sub", "out"))
 
 
 def grade(submission: Path, out: Path, *, config: Path | None = None, grid_sizes=None,
@@ -340,7 +340,8 @@ def _grade_one(task, g, cfg, found, box_maker, slot, hide, timeout, memory, pts,
         reason = (f"timed out: the task did not finish within {timeout or cfg['timeout']:g} s "
                   "(a loop that never ends, or a solution far slower than the template)")
     elif res.disk_exceeded:
-        reason = f"stopped: the task {res.disk_exceeded} (the limit of its scratch folder)"
+        reason = (f"stopped: the task {res.disk_exceeded}" if "memory" in res.disk_exceeded else
+                  f"stopped: the task {res.disk_exceeded} (the limit of its scratch folder)")
     elif err_why:
         reason = err_why
     elif err is not None:

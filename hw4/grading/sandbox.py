@@ -17,7 +17,9 @@ Output (stdout and stderr) goes to files the child cannot reopen and is read bac
 """
 from __future__ import annotations
 
+import contextlib
 import ctypes
+import fcntl
 import os
 import pwd
 import resource
@@ -140,6 +142,34 @@ def ensure_user(slot: int = 0) -> tuple[int, int] | None:
         except KeyError:
             return None
     return pw.pw_uid, pw.pw_gid
+
+
+@contextlib.contextmanager
+def exclusive_user(slot: int = 0):
+    """(uid, gid) of a grading user no other grader on this machine uses meanwhile (None when
+    not root). After each task every process of the user is killed: two graders sharing one
+    user (two TAs, a check during a batch) would kill each other's tasks. A lock file per user
+    (``flock``, released at exit even on a crash) makes the first free one from ``slot`` ours."""
+    if not is_root():
+        yield None
+        return
+    for k in range(slot, slot + 64):
+        path = os.path.join(tempfile.gettempdir(), f".{USER_PREFIX}{k}.lock")
+        try:
+            fd = os.open(path, os.O_RDWR | os.O_CREAT | os.O_NOFOLLOW | os.O_CLOEXEC, 0o600)
+        except OSError:
+            continue
+        try:
+            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except OSError:
+            os.close(fd)
+            continue
+        try:
+            yield ensure_user(k)
+        finally:
+            os.close(fd)
+        return
+    yield ensure_user(slot)
 
 
 _NS_OK = None
@@ -337,7 +367,7 @@ def run(argv: list, scratch: Path, limits: Limits, *, user: tuple | None = None,
                 if left <= 0.25:
                     timed_out = True
                     break
-                disk = _disk_over(scratch, limits)
+                disk = _disk_over(scratch, limits) or (user and _memory_over(user[0], limits))
                 if disk:
                     break
     seconds = time.monotonic() - t0
@@ -356,6 +386,24 @@ def run(argv: list, scratch: Path, limits: Limits, *, user: tuple | None = None,
                  killed, notes, disk)
     shutil.rmtree(logs, ignore_errors=True)
     return res
+
+
+def _memory_over(uid: int, limits: Limits) -> str | None:
+    """Why the processes of ``uid`` together exceed the task's memory, or None.
+
+    RLIMIT_AS bounds one process; forks (up to RLIMIT_NPROC) would multiply it."""
+    page = os.sysconf("SC_PAGE_SIZE")
+    total = 0
+    for d in os.listdir("/proc"):
+        if d.isdigit() and _owner(d) == uid:
+            try:
+                with open(f"/proc/{d}/statm", "rb") as f:
+                    total += int(f.read().split()[1]) * page
+            except (OSError, ValueError, IndexError):
+                continue
+    if total > limits.memory_mb * 2**20:
+        return f"used more than {limits.memory_mb} MB of memory (all its processes together)"
+    return None
 
 
 def _disk_over(scratch: Path, limits: Limits) -> str | None:
