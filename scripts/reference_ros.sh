@@ -127,7 +127,11 @@ else
 fi
 # shellcheck disable=SC1091
 source "$WS/devel/setup.bash"
-export ROS_MASTER_URI=http://localhost:11311 ROS_HOME=$WS/.ros ROS_LOG_DIR=$LOG/ros
+# A master of our own on a free port (HW4_ROS_PORT to choose one): a ROS master the user already
+# runs on 11311, or a second run of this script, would otherwise see our nodes (a node registered
+# twice under one name is shut down by the master).
+ROS_PORT=${HW4_ROS_PORT:-$("$PY" -c 'import socket; s = socket.socket(); s.bind(("127.0.0.1", 0)); print(s.getsockname()[1])')}
+export ROS_MASTER_URI=http://localhost:$ROS_PORT ROS_HOME=$WS/.ros ROS_LOG_DIR=$LOG/ros
 rospack find semantic_bki >/dev/null || die "ROS cannot find the package semantic_bki after the build"
 
 # ----------------------------------------------------------------------------- 5. inputs
@@ -166,7 +170,7 @@ cleanup() {
 }
 trap cleanup EXIT
 start_master() {
-    roscore -p 11311 > "$LOG/roscore.log" 2>&1 &
+    roscore -p "$ROS_PORT" > "$LOG/roscore.log" 2>&1 &
     MASTER=$!
     PIDS+=("$MASTER")
     for _ in $(seq 60); do rostopic list >/dev/null 2>&1 && return 0; sleep 0.5; done
