@@ -150,6 +150,28 @@ def test_interactive_page_is_offline_and_complete(tmp_path):
     # aggregation bounds the voxel count
     small = interactive.write_interactive(view, tmp_path / "small.html", max_voxels=50)
     assert small["factor"] > 1 and small["voxels"] <= 50
+    # the wheel scrolls the book's page, it is not trapped by the view
+    assert '"scrollZoom": false' in html
+
+
+def test_still_looks_from_the_interactive_views_first_camera(tmp_path):
+    box = (np.zeros(3), np.array([4.0, 2.0, 1.0]))
+    cam = interactive.still_camera(box)
+    e = interactive.EYE
+    elev, azim = np.radians(cam.elev), np.radians(cam.azim)
+    d = np.array([np.cos(elev) * np.cos(azim), np.cos(elev) * np.sin(azim), np.sin(elev)])
+    eye = np.array([e["x"], e["y"], e["z"]])
+    assert np.allclose(d, eye / np.linalg.norm(eye))   # the same direction towards the eye
+    assert np.allclose(cam.lo, box[0]) and np.allclose(cam.hi, box[1])
+    rng = np.random.default_rng(0)
+    view = small_map(rng.uniform(0, 4, size=(300, 3)) * [1, 0.5, 0.25], rng.integers(1, 4, 300),
+                     method="sbki", resolution=0.25)
+    out = interactive.write_still(view, tmp_path / "still.png", box, trajectory=[[0, 1, 0.5], [4, 1, 0.5]],
+                                  width=3.0, dpi=60)
+    from PIL import Image
+    img = np.asarray(Image.open(out).convert("RGB"))
+    assert img.shape[1] == 180 and (img < 200).any()   # 3 in at 60 dpi, and something drawn
+    assert [p.name for p in tmp_path.iterdir()] == ["still.png"]   # no temporary left behind
 
 
 def test_mcap_error_on_finish_leaves_no_file(tmp_path, monkeypatch):

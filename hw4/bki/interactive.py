@@ -157,7 +157,44 @@ def _layout(title: str, aspectratio: dict) -> dict:
         modebar=dict(orientation="v"),
         scene=dict(aspectmode="manual", aspectratio=aspectratio,
                    xaxis_title="x [m]", yaxis_title="y [m]", zaxis_title="z [m]",
-                   camera=dict(eye=dict(x=-1.1, y=0.0, z=0.55), center=dict(x=0.1, y=0, z=-0.1))))
+                   camera=dict(eye=dict(EYE), center=dict(x=0.1, y=0, z=-0.1))))
+
+
+EYE = dict(x=-1.1, y=0.0, z=0.55)
+"""The first camera of the view: its eye in plotly's scene units (the scene's aspect ratio is the
+map's, so the direction is the same in metres)."""
+
+
+def still_camera(box):
+    """The :class:`~hw4.bki.render.Camera` that looks at ``box`` (a (lo, hi) pair of (3,) arrays
+    [m], world frame) from the direction of the interactive view's first camera (:data:`EYE`):
+    the view's still image, for a page where the view is loaded only on a click."""
+    from .render import Camera
+    e = np.array([EYE["x"], EYE["y"], EYE["z"]], float)
+    elev = float(np.degrees(np.arctan2(e[2], np.hypot(e[0], e[1]))))
+    azim = float(np.degrees(np.arctan2(e[1], e[0])))
+    return Camera(elev, azim, tuple(np.asarray(box[0], float)), tuple(np.asarray(box[1], float)),
+                  zoom=1.5, persp=True)
+
+
+def write_still(view: MapView, path, box, trajectory=None, title: str = "", width: float = 7.0,
+                dpi: int = 150) -> Path:
+    """Write a PNG of the occupied voxels of ``view`` inside ``box`` as the interactive view first
+    shows them (:func:`still_camera`; shaded cubes, the class legend below), ``width`` inch wide;
+    written under a temporary name and renamed, so a failed run leaves no still."""
+    import matplotlib.pyplot as plt
+    from . import render
+    fig = render.plot_maps({title: view}, still_camera(box), width=width, trajectory=trajectory,
+                           legend="below")
+    path = Path(path)
+    tmp = path.with_name(path.name + ".partial")
+    try:
+        tmp.write_bytes(render.png_bytes(fig, dpi))
+        tmp.replace(path)
+    finally:
+        plt.close(fig)
+        tmp.unlink(missing_ok=True)
+    return path
 
 
 def vendor_plotly(folder, target=None) -> Path:
@@ -230,11 +267,13 @@ _FIT_CAMERA = """
 def _page_html(fig) -> str:
     """The stand-alone page of ``fig``: plotly.js by its relative name, the plot filling the window
     (on a phone too: the page declares the device's width as its own, and the first view backs
-    off on a screen taller than wide so that the map fits across). The page never scrolls: the
+    off on a screen taller than wide so that the map fits across). The mouse wheel does not zoom
+    (``scrollZoom`` off: on a book page it scrolls the page instead of being trapped by the view;
+    zoom with the tool bar's zoom mode, dragging up or down). The page never scrolls: the
     plot fills it exactly, and a scroll bar would narrow the window and call up the other one."""
     html = fig.to_html(include_plotlyjs="plotly.min.js", full_html=True, div_id="map3d",
                        default_width="100%", default_height="100%", post_script=_FIT_CAMERA,
-                       config=dict(displaylogo=False, scrollZoom=True, responsive=True))
+                       config=dict(displaylogo=False, scrollZoom=False, responsive=True))
     return html.replace("<head>", "<head><title>3D semantic map</title>"
                         '<meta name="viewport" content="width=device-width, initial-scale=1">'
                         "<style>html,body{height:100%;margin:0;overflow:hidden}</style>", 1)
