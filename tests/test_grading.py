@@ -397,6 +397,7 @@ def test_attacks_links_fifo_markdown_disk_other_copies(tmp_path, capsys):
     assert t[1]["score"] == 0 and "link or a special file" in t[1]["output"], t[1]["output"]
     assert t[4]["score"] == 0 and "link or a special file" in t[4]["output"], t[4]["output"]
     assert "\x1b" not in everything
+    assert res["test_output_format"] == "md"  # Gradescope renders the escapes and fences
     assert "<img" not in report.replace("\\<img", "") and "**70" not in report.replace("\\*\\*70", "")
     fences = [ln for ln in report.splitlines() if ln.startswith("```")]
     assert any(len(f) > 8 for f in fences), "a line of the output can close the report's fence"
@@ -516,3 +517,24 @@ def test_two_graders_at_once_do_not_kill_each_others_tasks(tmp_path):
     out, err = other.communicate(timeout=300)
     res = json.loads((tmp_path / "o_slow" / "results.json").read_text())
     assert "SystemExit" in _tests(res)[1]["output"], _tests(res)[1]["output"]
+
+
+def test_deep_trees_do_not_crash_the_grader(tmp_path, capsys):
+    sub = tmp_path / "deep"
+    sub.mkdir()
+    shutil.copyfile(FIX / "attacks_d" / "ogm_S_CSM.py", sub / "ogm_S_CSM.py")
+    fd = os.open(sub, os.O_RDONLY)
+    for _ in range(1200):  # a submitted folder nested deeper than Python's recursion limit
+        os.mkdir("d", dir_fd=fd)
+        fd, old = os.open("d", os.O_RDONLY, dir_fd=fd), fd
+        os.close(old)
+    os.close(fd)
+    try:
+        assert main(["grade", str(sub), "--out", str(tmp_path / "o"), "--grid-size", "1"]) == 0
+    finally:
+        sandbox.remove_tree(sub)
+    res = json.loads((tmp_path / "o" / "results.json").read_text())
+    assert "SystemExit" in _tests(res)[3]["output"], _tests(res)[3]["output"]
+    arc = _tar(tmp_path / "d.tgz", [("u/" + "a/" * 40 + "ogm_CSM.py", "file", b"x")])
+    with pytest.raises(InputError, match="folders deep"):
+        archive.extract(arc, tmp_path / "x")

@@ -17,6 +17,7 @@ TASK_FILES = {1: ("ogm_CSM.py",), 2: ("ogm_continuous_CSM.py",), 3: ("ogm_S_CSM.
 MAX_FILES = 200
 MAX_BYTES = 20 * 2**20        # extracted size of the whole archive
 MAX_FILE_BYTES = 5 * 2**20    # one file
+MAX_DEPTH = 16                # folders in a member's path
 SAFE_NAME = re.compile(r"^[A-Za-z0-9_][A-Za-z0-9_.-]{0,99}$")
 ARCHIVES = (".tgz", ".tar.gz", ".tar", ".zip")
 
@@ -31,7 +32,10 @@ def _member_parts(name: str) -> tuple:
         raise InputError(f"the archive holds an absolute path ({name!r}): refused")
     if any(part == ".." for part in p.parts):
         raise InputError(f"the archive holds a path leaving its folder ({name!r}): refused")
-    return tuple(x for x in p.parts if x not in ("", "."))
+    parts = tuple(x for x in p.parts if x not in ("", "."))
+    if len(parts) > MAX_DEPTH:
+        raise InputError(f"the archive holds a path {len(parts)} folders deep: refused")
+    return parts
 
 
 def extract(archive: Path, dest: Path) -> list[str]:
@@ -106,8 +110,11 @@ def find_root(folder: Path, notes: list | None = None) -> Path:
         return sum(any((d / f).is_file() for f in names) for names in TASK_FILES.values())
     if score(folder):
         return folder
-    cands = [d for d in sorted(folder.rglob("*")) if d.is_dir() and not d.is_symlink()
-             and "__MACOSX" not in d.parts and score(d)]
+    dirs, level = [], [folder]
+    for _ in range(6):  # breadth first, a few levels (a folder nested thousands deep is fine)
+        level = [d for p in level for d in _subfolders(p)]
+        dirs += level
+    cands = [d for d in sorted(dirs) if score(d)]
     if not cands:
         raise InputError("no task file (ogm_CSM.py, ogm_continuous_CSM.py, ogm_S_CSM.py, "
                          "ogm_continuous_S_CSM.py) found in the submission")
@@ -117,6 +124,14 @@ def find_root(folder: Path, notes: list | None = None) -> Path:
         notes.append(f"task files are in several folders: graded {best.relative_to(folder)} "
                      f"(the one with the most), not {others}")
     return best
+
+
+def _subfolders(p: Path) -> list:
+    try:
+        return [d for d in p.iterdir() if d.name != "__MACOSX" and not d.is_symlink()
+                and d.is_dir()]
+    except OSError:
+        return []
 
 
 def collect(root: Path, dest: Path) -> tuple[dict, list[str]]:

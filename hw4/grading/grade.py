@@ -119,8 +119,7 @@ class _Box:
 
     def fresh(self, task: int) -> Path:
         box = self.base / "box"
-        if box.exists():
-            shutil.rmtree(box)
+        sandbox.remove_tree(box)
         box.mkdir()
         shutil.copytree(self.pristine, box / "sub")
         (box / "support").mkdir()
@@ -256,7 +255,7 @@ def _grade(submission, out, stage, cfg, grid_sizes, timeout, memory, visible_onl
                 test["visibility"] = vis
                 tests.append(test)
     finally:
-        shutil.rmtree(base, ignore_errors=True)
+        sandbox.remove_tree(base)
     iso = list(dict.fromkeys(n for t in tests for n in t.get("_isolation", ())))
     total = round(sum(t["score"] for t in tests), 4)
     max_total = round(sum(t["max_score"] for t in tests), 4)
@@ -265,6 +264,7 @@ def _grade(submission, out, stage, cfg, grid_sizes, timeout, memory, visible_onl
         "execution_time": round(time.monotonic() - t_start, 1),
         "output": _summary(total, max_total, sizes, notes),
         "output_format": "md",
+        "test_output_format": "md",  # the tests' outputs hold tables and code fences
         "tests": [{k: v for k, v in t.items() if not k.startswith("_")} for t in tests],
         "extra_data": {"grid_sizes": sizes, "hw4_grader": 1, "sandbox_limits": iso,
                        "grader_error": any(t.get("_grader_error") for t in tests)},

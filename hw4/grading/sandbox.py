@@ -391,16 +391,25 @@ def run(argv: list, scratch: Path, limits: Limits, *, user: tuple | None = None,
 def _memory_over(uid: int, limits: Limits) -> str | None:
     """Why the processes of ``uid`` together exceed the task's memory, or None.
 
-    RLIMIT_AS bounds one process; forks (up to RLIMIT_NPROC) would multiply it."""
+    RLIMIT_AS bounds one process; forks (up to RLIMIT_NPROC) would multiply it. Each process
+    counts its proportional share of the pages it shares (Pss: forks share the parent's pages
+    until they write them)."""
     page = os.sysconf("SC_PAGE_SIZE")
     total = 0
     for d in os.listdir("/proc"):
         if d.isdigit() and _owner(d) == uid:
             try:
-                with open(f"/proc/{d}/statm", "rb") as f:
-                    total += int(f.read().split()[1]) * page
+                with open(f"/proc/{d}/smaps_rollup", "rb") as f:
+                    for line in f:
+                        if line.startswith(b"Pss:"):
+                            total += int(line.split()[1]) * 1024
+                            break
             except (OSError, ValueError, IndexError):
-                continue
+                try:  # kernels before 4.14: resident pages, shared ones counted in each
+                    with open(f"/proc/{d}/statm", "rb") as f:
+                        total += int(f.read().split()[1]) * page
+                except (OSError, ValueError, IndexError):
+                    continue
     if total > limits.memory_mb * 2**20:
         return f"used more than {limits.memory_mb} MB of memory (all its processes together)"
     return None
@@ -451,6 +460,18 @@ def _tops_to_hide(interpreter: str) -> list:
         if name not in keep and os.path.isdir(path) and not os.path.islink(path):
             out.append(path)
     return out
+
+
+def remove_tree(path) -> None:
+    """Remove ``path`` (never following links), also a tree nested thousands of folders deep
+    by a submission (``shutil.rmtree`` recurses and raises RecursionError there)."""
+    try:
+        shutil.rmtree(path)
+    except FileNotFoundError:
+        pass
+    except (OSError, RecursionError):
+        subprocess.run(["rm", "-rf", "--one-file-system", "--", str(path)], check=False,
+                       stdin=subprocess.DEVNULL, capture_output=True)
 
 
 def _owner(pid: str) -> int:
