@@ -223,15 +223,38 @@ def figure_to_array(fig) -> np.ndarray:
     return np.asarray(fig.canvas.buffer_rgba())[:, :, :3].copy()
 
 
-def write_video(frames, gif_path=None, mp4_path=None, fps: float = 2.0) -> list[Path]:
+def _blend(a: np.ndarray, b: np.ndarray, t: float) -> np.ndarray:
+    """The frame ``t`` of the way from ``a`` to ``b`` (0 <= t <= 1), both (H, W, 3) uint8."""
+    return np.rint((1.0 - t) * a + t * b).astype(np.uint8)
+
+
+def write_video(frames, gif_path=None, mp4_path=None, fps: float = 2.0, hold: int = 1,
+                fade: int = 0, gif_fade: int | None = None) -> list[Path]:
     """Write frames (list of (H, W, 3) uint8 arrays) as a looping GIF and/or an H.264 MP4.
 
+    The MP4 plays at ``fps`` frames per second and shows each given frame for ``hold`` video
+    frames, then cross-fades to the next over ``fade`` frames (each a blend of the two), so a few
+    maps make a smooth video: 24 fps, ``hold=24`` and ``fade=12`` show each map for a second and
+    take half a second to turn into the next. The GIF lasts as long but stores each map once, shown
+    for ``hold / fps`` s, and the cross-fade in ``gif_fade`` frames (default ``min(fade, 3)``), to
+    stay small. The defaults (``hold=1``, ``fade=0``) write one video frame per given frame.
     The MP4 uses the ffmpeg binary shipped by ``imageio-ffmpeg``; frames are padded to even sizes.
     """
     import imageio.v2 as imageio
+    if hold < 1 or fade < 0:
+        raise ValueError(f"hold must be >= 1 and fade >= 0 (got {hold}, {fade})")
+    gif_fade = min(fade, 3) if gif_fade is None else min(gif_fade, fade)
     out = []
     if gif_path is not None:
-        imageio.mimsave(gif_path, frames, duration=1000.0 / fps, loop=0)
+        seq, durations = [], []
+        for i, f in enumerate(frames):
+            seq.append(f)
+            durations.append(1000.0 * hold / fps)
+            if i + 1 < len(frames):
+                for j in range(1, gif_fade + 1):
+                    seq.append(_blend(f, frames[i + 1], j / (gif_fade + 1)))
+                    durations.append(1000.0 * fade / fps / gif_fade)
+        imageio.mimsave(gif_path, seq, duration=durations, loop=0)
         out.append(Path(gif_path))
     if mp4_path is not None:
         h, w = frames[0].shape[:2]
@@ -239,8 +262,12 @@ def write_video(frames, gif_path=None, mp4_path=None, fps: float = 2.0) -> list[
         with imageio.get_writer(mp4_path, fps=fps, codec="libx264", quality=7,
                                 macro_block_size=1, ffmpeg_log_level="error",
                                 output_params=["-pix_fmt", "yuv420p"]) as wr:
-            for f in pad:
-                wr.append_data(f)
+            for i, f in enumerate(pad):
+                for _ in range(hold):
+                    wr.append_data(f)
+                if i + 1 < len(pad):
+                    for j in range(1, fade + 1):
+                        wr.append_data(_blend(f, pad[i + 1], j / (fade + 1)))
         out.append(Path(mp4_path))
     return out
 
@@ -558,7 +585,7 @@ def plot_slices(panels: dict, z: float, cam: Camera, width: float = 4.0):
 
 def mapping_video(view_groups, cam: Camera, titles, gif=None, mp4=None, strip=None,
                   strip_scans=None, width: float = 4.0, dpi: int = 120, fps: float = 2.0,
-                  trajectory=None, strip_width: float = 7.0) -> list:
+                  trajectory=None, strip_width: float = 7.0, hold: int = 1, fade: int = 0) -> list:
     """Render the map after each scan (methods side by side) and write GIF, MP4 and a PNG strip.
 
     Parameters
@@ -571,6 +598,8 @@ def mapping_video(view_groups, cam: Camera, titles, gif=None, mp4=None, strip=No
     strip_scans : sequence of int, optional
         1-based scan numbers of the strip's frames (default: four evenly spaced, ending with the last).
     strip_width : float [inch], width of the strip (:func:`plot_strip`), its print size
+    fps, hold, fade : frame rate, video frames per map and cross-fade frames between maps
+        (:func:`write_video`; e.g. 24, 24, 12 for a smooth video)
     trajectory : (T, 3) array [m], optional
         Sensor origins; frame ``i`` draws the path up to scan ``i``.
 
@@ -591,7 +620,7 @@ def mapping_video(view_groups, cam: Camera, titles, gif=None, mp4=None, strip=No
         plt.close(fig)
         del fig, views  # free this frame's map views and figure before the next map is viewed
         gc.collect()    # (a 3D figure of ~100k voxel faces is a reference cycle)
-    write_video(frames, gif, mp4, fps)
+    write_video(frames, gif, mp4, fps, hold=hold, fade=fade)
     if strip is not None:
         n = len(frames)
         picks = strip_scans or sorted({max(1, round(n * q)) for q in (0.25, 0.5, 0.75, 1.0)})
