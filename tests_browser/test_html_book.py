@@ -279,17 +279,130 @@ def test_search_from_disk_without_console_errors(driver):
     assert not errors, f"search.html from disk: console errors {errors}"
 
 
+INTERACTIVE_PAGE = "notebooks/T5_bki_3d.html"
+# what the page has fetched (Performance API) and what its interactive view shows
+VIEW_STATE = """
+const view = document.querySelector('.hw4-interactive');
+const still = view.querySelector('.hw4-interactive-still');
+const frame = view.querySelector('iframe');
+let plot = false;
+try { plot = !!(frame && frame.contentDocument &&
+                frame.contentDocument.querySelector('.js-plotly-plot .main-svg')); } catch (e) {}
+return {
+  fetched: performance.getEntriesByType('resource').map(e => e.name)
+      .filter(n => /t5_kitti04_map3d\\.html|plotly/i.test(n)),
+  still: !!(still && still.complete && still.naturalWidth > 0 && still.offsetHeight > 100),
+  button: !!view.querySelector('.hw4-interactive-load:not([disabled])'),
+  frame: frame ? {src: frame.getAttribute('src'), title: frame.title, height: frame.offsetHeight,
+                  width: frame.offsetWidth} : null,
+  plot: plot,
+  note: (view.querySelector('.hw4-interactive-note') || {}).textContent || null,
+  dataSrc: view.dataset.src, dataTitle: view.dataset.title,
+};
+"""
+
+
+def _load_view(driver, book_url):
+    """Open Task 5's page, scroll its interactive view into sight; return the view's state."""
+    driver.get_log("browser")
+    driver.get(book_url + INTERACTIVE_PAGE)
+    driver.execute_async_script(LOAD_STATE)
+    driver.execute_script(
+        "document.querySelector('.hw4-interactive').scrollIntoView({block: 'start'})")
+    time.sleep(0.5)
+    return driver.execute_script(VIEW_STATE)
+
+
+def _wheel_scrolls(driver, selector):
+    """Turn the mouse wheel over the middle of `selector`; return how far the page scrolled [px]."""
+    driver.execute_script("window.scrollBy(0, -300)")
+    time.sleep(0.3)
+    r = driver.execute_script(
+        f"const r = document.querySelector('{selector}').getBoundingClientRect();"
+        "return [r.left + r.width / 2, Math.max(r.top, 0) + Math.min(r.height, 200) / 2]")
+    y0 = driver.execute_script("return window.scrollY")
+    for _ in range(3):
+        driver.execute_cdp_cmd("Input.dispatchMouseEvent", {
+            "type": "mouseWheel", "x": int(r[0]), "y": int(r[1]), "deltaX": 0, "deltaY": 100})
+        time.sleep(0.15)
+    time.sleep(0.5)
+    return driver.execute_script("return window.scrollY") - y0
+
+
+def test_3d_view_loads_on_a_click(driver, book_url, shots):
+    """At page open Task 5's 3D view is a still image and nothing of the view (its page, plotly)
+    is fetched; a click on its button loads it in an iframe of the still's size; at 1400 px the
+    wheel over the still and over the loaded view scrolls the page (no wheel trap)."""
+    _viewport(driver, WIDE)
+    before = _load_view(driver, book_url)
+    assert before["still"], f"{INTERACTIVE_PAGE}: the 3D view's still image is not shown"
+    assert before["button"], f"{INTERACTIVE_PAGE}: no button loads the 3D view"
+    assert before["frame"] is None, f"{INTERACTIVE_PAGE}: the 3D view is loaded at page open"
+    assert not before["fetched"], f"{INTERACTIVE_PAGE}: fetched at page open: {before['fetched']}"
+    still_height = driver.execute_script(
+        "return document.querySelector('.hw4-interactive-still').offsetHeight")
+    moved = _wheel_scrolls(driver, ".hw4-interactive-still")
+    assert moved > 100, f"{INTERACTIVE_PAGE}: the wheel over the still scrolled {moved} px"
+
+    driver.execute_script(
+        "document.querySelector('.hw4-interactive').scrollIntoView({block: 'start'});"
+        "document.querySelector('.hw4-interactive-load').click()")
+    after = _wait(driver, VIEW_STATE, lambda v: v["plot"], tries=300)
+    frame = after["frame"]
+    assert frame is not None, f"{INTERACTIVE_PAGE}: the click did not load the 3D view"
+    assert frame["src"] == after["dataSrc"] and frame["title"] == after["dataTitle"]
+    assert after["plot"], f"{INTERACTIVE_PAGE}: the 3D view's plot did not render in 30 s"
+    assert not after["still"] and not after["button"] and after["note"] is None
+    assert abs(frame["height"] - still_height) <= 2, (
+        f"{INTERACTIVE_PAGE}: the view is {frame['height']} px high, its still {still_height} px")
+    assert any("t5_kitti04_map3d.html" in n for n in after["fetched"])
+    driver.save_screenshot(str(shots / "t5_interactive_loaded_1400.png"))
+    moved = _wheel_scrolls(driver, ".hw4-interactive iframe")
+    assert moved > 100, f"{INTERACTIVE_PAGE}: the wheel over the 3D view scrolled {moved} px"
+    errors = _console_errors(driver)
+    assert not errors, f"{INTERACTIVE_PAGE}: console errors after loading the 3D view: {errors}"
+
+
+def test_3d_view_without_webgl_keeps_its_still(driver, book_url, shots):
+    """Where a canvas offers no WebGL (getContext stubbed before the page's scripts run), a click
+    keeps the still image, says in one line that the view needs WebGL and fetches nothing."""
+    _viewport(driver, WIDE)
+    stub = driver.execute_cdp_cmd("Page.addScriptToEvaluateOnNewDocument", {"source": (
+        "const g = HTMLCanvasElement.prototype.getContext;"
+        "HTMLCanvasElement.prototype.getContext = function (kind, ...rest) {"
+        "  return /webgl/i.test(kind) ? null : g.call(this, kind, ...rest); };")})
+    try:
+        _load_view(driver, book_url)
+        driver.execute_script("document.querySelector('.hw4-interactive-load').click()")
+        time.sleep(1.0)
+        state = driver.execute_script(VIEW_STATE)
+        driver.save_screenshot(str(shots / "t5_interactive_no_webgl_1400.png"))
+    finally:
+        driver.execute_cdp_cmd("Page.removeScriptToEvaluateOnNewDocument",
+                               {"identifier": stub["identifier"]})
+    assert state["frame"] is None, f"{INTERACTIVE_PAGE}: without WebGL an iframe was loaded"
+    assert state["still"], f"{INTERACTIVE_PAGE}: without WebGL the still image is gone"
+    assert state["note"] and "WebGL" in state["note"], (
+        f"{INTERACTIVE_PAGE}: without WebGL no line says why the view does not load")
+    assert not state["fetched"], f"{INTERACTIVE_PAGE}: without WebGL fetched {state['fetched']}"
+
+
 def test_swipe_over_the_3d_view_scrolls_the_page_on_a_phone(driver, book_url):
-    """On a touch screen a swipe over Task 5's interactive view scrolls the page (a veil lies over
-    the view); after a tap on the veil the same swipe turns the map instead."""
-    page = "notebooks/T5_bki_3d.html"
+    """On a touch screen, once loaded, a swipe over Task 5's interactive view scrolls the page (a
+    veil lies over the view); after a tap on the veil the same swipe turns the map instead."""
+    page = INTERACTIVE_PAGE
     _viewport(driver, NARROW)
     driver.execute_cdp_cmd("Emulation.setTouchEmulationEnabled", {"enabled": True, "maxTouchPoints": 1})
     try:
         moved = []
         for tap in (False, True):
-            driver.get(book_url + page)
-            driver.execute_async_script(LOAD_STATE)
+            _load_view(driver, book_url)
+            driver.execute_script("document.querySelector('.hw4-interactive-load').click()")
+            loaded = _wait(driver, VIEW_STATE, lambda v: v["plot"], tries=300)
+            assert loaded["plot"], f"{page}: the 3D view did not load on a click at {NARROW} px"
+            assert driver.execute_script(
+                "return !!document.querySelector('.hw4-interactive .hw4-veil')"), (
+                f"{page}: no veil over the loaded 3D view on a touch screen")
             driver.execute_script(
                 "document.querySelector('.hw4-interactive').scrollIntoView({block: 'start'})")
             time.sleep(1.0)

@@ -25,8 +25,11 @@
  *    hw4-book.css), so the paused player's controls do not cover the plot.
  * 7. The header's download menu offers the whole book's PDF (the link at the foot of the chapter
  *    list, book/_ext/templates/hw4-pdf-link.html) above the theme's "print this page".
- * 8. On a touch screen the interactive 3D view sits under a veil, so that a swipe over it scrolls
- *    the page instead of turning the map; a tap lifts the veil, a touch elsewhere lowers it.
+ * 8. An interactive 3D view (`.hw4-interactive`, data-src and data-title) shows a still image and
+ *    loads nothing more until its button is clicked: then, where a canvas offers WebGL, an iframe
+ *    of data-src of the still's size replaces the still; without WebGL the still stays and one
+ *    line says why. On a touch screen the view then sits under a veil, so that a swipe over it
+ *    scrolls the page instead of turning the map; a tap lifts the veil, a touch elsewhere lowers it.
  * 9. A table or code cell wider than its column shows that it scrolls: a shade at each edge that
  *    has more to show (hw4-book.css), updated as it scrolls and when the window changes width.
  */
@@ -316,7 +319,8 @@
     Array.prototype.forEach.call(images, function (img) {
       var src = img.getAttribute("src");
       // already a link, or inline data a browser will not open as a page
-      if (!src || /^data:/.test(src) || img.closest("a")) {
+      // (the still of an interactive view is replaced by the view on a click: not a figure)
+      if (!src || /^data:/.test(src) || img.closest("a") || img.closest(".hw4-interactive")) {
         return;
       }
       var link = document.createElement("a");
@@ -545,35 +549,76 @@
     });
   }
 
-  function veilInteractive() {
-    if (!window.matchMedia("(pointer: coarse)").matches) {
+  function veil(view, frame) {
+    if (!window.matchMedia("(pointer: coarse)").matches || view.querySelector(".hw4-veil")) {
       return;
     }
+    var cover = document.createElement("button");
+    cover.type = "button";
+    cover.className = "hw4-veil";
+    cover.setAttribute("aria-label", "Use the 3D view (a swipe over it then turns the map)");
+    cover.innerHTML = "<span>Tap to rotate and zoom</span>";
+    function place() {
+      cover.style.height = frame.offsetHeight + "px";
+    }
+    cover.addEventListener("click", function () {
+      cover.hidden = true;
+    });
+    document.addEventListener("touchstart", function (event) {
+      if (cover.hidden && !frame.contains(event.target) && event.target !== frame) {
+        cover.hidden = false;
+      }
+    }, {passive: true});
+    window.addEventListener("resize", place);
+    view.insertBefore(cover, frame.nextSibling);
+    place();
+  }
+
+  function hasWebGL() {
+    try {
+      var canvas = document.createElement("canvas");
+      return !!(canvas.getContext("webgl2") || canvas.getContext("webgl"));
+    } catch (e) {
+      return false;
+    }
+  }
+
+  function interactiveViews() {
     var views = document.querySelectorAll(".hw4-interactive");
     Array.prototype.forEach.call(views, function (view) {
       var frame = view.querySelector("iframe");
-      if (!frame) {
+      if (frame) {  // a view loaded with its page
+        veil(view, frame);
         return;
       }
-      var veil = document.createElement("button");
-      veil.type = "button";
-      veil.className = "hw4-veil";
-      veil.setAttribute("aria-label", "Use the 3D view (a swipe over it then turns the map)");
-      veil.innerHTML = "<span>Tap to rotate and zoom</span>";
-      function place() {
-        veil.style.height = frame.offsetHeight + "px";
+      var button = view.querySelector(".hw4-interactive-load");
+      var still = view.querySelector(".hw4-interactive-still");
+      if (!button || !still || !view.dataset.src) {
+        return;
       }
-      veil.addEventListener("click", function () {
-        veil.hidden = true;
-      });
-      document.addEventListener("touchstart", function (event) {
-        if (veil.hidden && !frame.contains(event.target) && event.target !== frame) {
-          veil.hidden = false;
+      button.addEventListener("click", function () {
+        if (!hasWebGL()) {
+          var note = view.querySelector(".hw4-interactive-note") || document.createElement("p");
+          note.className = "hw4-interactive-note";
+          note.setAttribute("role", "status");
+          note.textContent = "The interactive 3D view needs WebGL, which this browser does not " +
+            "offer: the image above is a still of it.";
+          view.insertBefore(note, button.nextSibling);
+          button.disabled = true;
+          return;
         }
-      }, {passive: true});
-      window.addEventListener("resize", place);
-      view.insertBefore(veil, frame.nextSibling);
-      place();
+        var iframe = document.createElement("iframe");
+        iframe.src = view.dataset.src;
+        iframe.title = view.dataset.title || "Interactive view";
+        iframe.className = "hw4-interactive-frame";
+        iframe.style.width = "100%";
+        iframe.style.height = Math.max(still.offsetHeight, 300) + "px";
+        iframe.style.border = "0";
+        view.replaceChild(iframe, still);
+        button.remove();
+        veil(view, iframe);
+        iframe.focus();
+      });
     });
   }
 
@@ -586,7 +631,7 @@
     scrollCues();
     sizeVideos();
     bookPdfButton();
-    veilInteractive();
+    interactiveViews();
     watchMaths();
   }
   if (document.readyState !== "loading") {
