@@ -295,7 +295,8 @@ def draw_trajectory(ax, trajectory: np.ndarray, lift: float = 0.3) -> None:
 
 def plot_maps(views: dict, cam: Camera, colour: str = "class", which: str = "occupied",
               vmax: float = 0.09, width: float = 5.0, fig=None, trajectory=None,
-              legend_cols: int = 1, log_variance: bool = False, legend: str = "right"):
+              legend_cols: int = 1, log_variance: bool = False, legend: str = "right",
+              stack: bool = False, tall: float | None = None):
     """3D voxel renders of several maps side by side, all seen from the same camera.
 
     Parameters
@@ -314,22 +315,30 @@ def plot_maps(views: dict, cam: Camera, colour: str = "class", which: str = "occ
     legend : {"right", "below"}
         Where the class legend goes. ``"below"`` (for print) keeps the figure ``width * n`` wide:
         the legend runs under the panels, and a variance colour bar takes its width from them.
+    stack : bool
+        With ``legend="below"``: the panels one above the other, each ``width`` inch wide (a
+        full-page figure of a large map), instead of side by side.
+    tall : float, optional
+        Height / width of a panel (default: 0.85 for a perspective camera, else 0.8).
     """
     import matplotlib.pyplot as plt
     n = len(views)
     below = legend == "below"
     if fig is None:
-        tall = 1.0 if cam.persp else 0.8  # a zoomed view from the car reaches past its axes
+        given, tall = tall, 1.0 if cam.persp else 0.8  # a zoomed view from the car reaches past its axes
         if below:
-            tall = 0.85 if cam.persp else 0.8
+            tall = given or (0.85 if cam.persp else 0.8)
             side = 0.75 if colour == "variance" else 0.0
             rows = 0 if colour == "variance" else 1 + (len(legend_handles(views, cam, trajectory is not None)) - 1) // 6
             foot = 0.2 * rows + 0.25 * (rows > 0)             # [in] for the legend rows
             w_total, h_total = width * n, (width * n - side) / n * tall + foot
+            if stack:
+                w_total, h_total = width, (width - side) * tall * n + foot
             fig = plt.figure(figsize=(w_total, h_total))
             fig.subplots_adjust(left=0.0, right=1 - side / w_total,
-                                bottom=foot / h_total + (0.08 if cam.persp else 0.0),
-                                top=1.02 if cam.persp else 0.95, wspace=0.05)
+                                bottom=foot / h_total + (0.08 if cam.persp else 0.0) / (n if stack else 1),
+                                top=0.97 if stack else (1.02 if cam.persp else 0.95),
+                                wspace=0.05, hspace=0.02)
         else:
             side = 0.8 if colour == "variance" else 1.45      # [in] for the colour bar or legend
             if not cam.persp:   # room for the titles and the x / z labels around the tilted box
@@ -341,13 +350,14 @@ def plot_maps(views: dict, cam: Camera, colour: str = "class", which: str = "occ
     axes = []
     present = shown_classes(views, cam)
     for i, (title, v) in enumerate(views.items()):
-        ax = fig.add_subplot(1, n, i + 1, projection="3d")
+        ax = fig.add_subplot(*((n, 1) if stack else (1, n)), i + 1, projection="3d")
         m = _mask(v, which) & cam.inside(v.centres)
         rgb = class_rgb(v, m, present) if colour == "class" else scalar_rgb(v.variance[m], vmax, log=log_variance)
         draw_voxels(ax, v.centres[m], rgb, v.resolution, cam)
         if trajectory is not None:
             draw_trajectory(ax, trajectory)
-        ax.set_title(title, fontsize=9.5)
+        # stacked: the title just above the drawing, clear of the x label of the panel above
+        ax.set_title(title, fontsize=9.5, y=0.86 if stack else None)
         axes.append(ax)
     if colour == "variance":
         if below:
