@@ -13,6 +13,10 @@ PNG) and the phone's "Zoom" button covers no part of its figure; a table wider t
 shows a shade at the edge that has more to show; search from disk shows a snippet under each
 result; a page without maths loads no MathJax; what every page loads besides its own content (the
 theme's CSS, scripts and fonts) stays under a measured bound.
+Task 5's 3D view: at page open only its still image (nothing of the view or plotly is fetched); a
+click loads it where WebGL exists and keeps the still with a one-line reason where it does not; at
+1400 px the wheel over the still and over the loaded view scrolls the page; on a phone a veil
+over the loaded view lets a swipe scroll the page.
 
 Run after the book is built (test.sh does): ``python -m pytest -p no:cacheprovider tests_browser``.
 A build elsewhere: ``HW4_BOOK_HTML=/path/to/_build/html python -m pytest ... tests_browser``.
