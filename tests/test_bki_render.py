@@ -29,7 +29,7 @@ def test_mp4_holds_each_map_and_cross_fades(tmp_path):
 
 def test_gif_stores_each_map_once_with_its_hold(tmp_path):
     from PIL import Image
-    render.write_video(_frames(), gif_path=tmp_path / "v.gif", fps=10, hold=3, fade=6)
+    render.write_video(_frames(), gif_path=tmp_path / "v.gif", fps=10, hold=3, fade=6, gif_fade=3)
     with Image.open(tmp_path / "v.gif") as img:
         n = img.n_frames
         durations = []
@@ -49,3 +49,39 @@ def test_default_writes_one_video_frame_per_map(tmp_path):
 def test_bad_timing_is_refused(tmp_path):
     with pytest.raises(ValueError, match="hold"):
         render.write_video(_frames(), mp4_path=tmp_path / "v.mp4", hold=0)
+
+
+def test_stacked_panels_are_full_width_one_above_the_other():
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    from test_bki_export import small_map
+    rng = np.random.default_rng(0)
+    view = small_map(rng.uniform(0, 3, size=(200, 3)), rng.integers(1, 4, 200), method="sbki",
+                     resolution=0.25)
+    cam = render.camera_for([view])
+    fig = render.plot_maps({"a": view, "b": view}, cam, width=5.0, legend="below", stack=True, tall=0.6)
+    axes = [ax for ax in fig.axes if ax.name == "3d"]
+    assert fig.get_size_inches()[0] == 5.0
+    a, b = (ax.get_position() for ax in axes)
+    assert a.y0 > b.y1 - 1e-9 and abs(a.x0 - b.x0) < 1e-9   # "a" above "b", same column
+    plt.close(fig)
+
+
+def test_interactive_markup_states_the_size_it_loads():
+    """The Task 5 page's load button names the size of the view it loads (page + plotly.js)."""
+    import json
+    import re
+    from pathlib import Path
+    root = Path(__file__).resolve().parents[1] / "notebooks"
+    nb = json.loads((root / "T5_bki_3d.ipynb").read_text(encoding="utf-8"))
+    cell = next("".join(c["source"]) for c in nb["cells"] if 'class="hw4-interactive"' in "".join(c["source"]))
+    assert "<iframe" not in cell
+    said = int(re.search(r"about (\d+) MB", cell).group(1))
+    folder = root / "_static" / "interactive"
+    page = folder / "t5_kitti04_map3d.html"
+    if not (folder / "plotly.min.js").exists():
+        pytest.skip("the notebook has not been run here (plotly.min.js is written by it)")
+    size = page.stat().st_size + (folder / "plotly.min.js").stat().st_size
+    assert said == round(size / 1e6)
+    assert (folder / "t5_kitti04_map3d_still.png").exists()

@@ -236,14 +236,14 @@ def write_video(frames, gif_path=None, mp4_path=None, fps: float = 2.0, hold: in
     frames, then cross-fades to the next over ``fade`` frames (each a blend of the two), so a few
     maps make a smooth video: 24 fps, ``hold=24`` and ``fade=12`` show each map for a second and
     take half a second to turn into the next. The GIF lasts as long but stores each map once, shown
-    for ``hold / fps`` s, and the cross-fade in ``gif_fade`` frames (default ``min(fade, 3)``), to
-    stay small. The defaults (``hold=1``, ``fade=0``) write one video frame per given frame.
+    for ``hold / fps`` s, and the cross-fade in ``gif_fade`` frames (default ``min(fade, 1)``: one
+    halfway blend), to stay small (each GIF frame is stored whole; the MP4 is the smooth one). The defaults (``hold=1``, ``fade=0``) write one video frame per given frame.
     The MP4 uses the ffmpeg binary shipped by ``imageio-ffmpeg``; frames are padded to even sizes.
     """
     import imageio.v2 as imageio
     if hold < 1 or fade < 0:
         raise ValueError(f"hold must be >= 1 and fade >= 0 (got {hold}, {fade})")
-    gif_fade = min(fade, 3) if gif_fade is None else min(gif_fade, fade)
+    gif_fade = min(fade, 1) if gif_fade is None else min(gif_fade, fade)
     out = []
     if gif_path is not None:
         seq, durations = [], []
