@@ -85,3 +85,25 @@ def test_interactive_markup_states_the_size_it_loads():
     size = page.stat().st_size + (folder / "plotly.min.js").stat().st_size
     assert said == round(size / 1e6)
     assert (folder / "t5_kitti04_map3d_still.png").exists()
+
+
+def test_fitted_slices_are_as_tall_as_the_map_needs():
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    from test_bki_export import small_map
+    rng = np.random.default_rng(0)
+    view = small_map(rng.uniform(0, 3, size=(200, 3)) * [1, 2, 1], rng.integers(1, 4, 200),
+                     method="sbki", resolution=0.25)
+    cam = render.Camera(30.0, -60.0, (0.0, 0.0, 0.0), (3.0, 6.0, 3.0))   # twice as long in y
+    panels = {"a": (view, "occupied"), "b": (view, "reference")}
+    fig = render.plot_slices(panels, z=1.0, cam=cam, width=2.0, fit=True)
+    w, h = fig.get_size_inches()
+    assert w == 4.0 and h == pytest.approx((2.0 - 0.15) * 2 + 1.25)
+    a, b = fig.axes[:2]
+    assert a.get_ylabel() == "y [m]" and b.get_ylabel() == ""     # labelled once, shared
+    assert a.get_shared_y_axes().joined(a, b)
+    plt.close(fig)
+    fig = render.plot_slices(panels, z=1.0, cam=cam, width=2.0)  # the default keeps its layout
+    assert tuple(fig.get_size_inches()) == (4.0, 2.3) and fig.axes[1].get_ylabel() == "y [m]"
+    plt.close(fig)

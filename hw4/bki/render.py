@@ -566,21 +566,27 @@ def plot_vertical_slices(views: dict, x: float, lo, hi, width: float = 7.0, pane
     return fig
 
 
-def plot_slices(panels: dict, z: float, cam: Camera, width: float = 4.0):
+def plot_slices(panels: dict, z: float, cam: Camera, width: float = 4.0, fit: bool = False):
     """Horizontal slices at height ``z`` [m] side by side: ``panels`` maps a title to
-    ``(MapView, which)`` with ``which`` in {"occupied", "reference"}."""
+    ``(MapView, which)`` with ``which`` in {"occupied", "reference"}, ``width`` inch per panel.
+
+    ``fit=True``: the figure is as tall as the slices' aspect ratio needs for each to fill its
+    ``width`` (instead of ``1.15 * width``), and the panels share their y axis (labelled once)."""
     import matplotlib.pyplot as plt
     from matplotlib.patches import Patch
     n = len(panels)
-    fig, axes = plt.subplots(1, n, figsize=(width * n, width * 1.15), squeeze=False,
-                             layout="constrained")
+    span = np.asarray(cam.hi[:2], float) - np.asarray(cam.lo[:2], float)
+    height = width * 1.15 if not fit else (width - 0.15) * span[1] / span[0] + 1.25
+    fig, axes = plt.subplots(1, n, figsize=(width * n, height), squeeze=False,
+                             layout="constrained", sharey=fit)
     present = sorted(set(np.concatenate([w.cls[w.state_reference == 2] for w, _ in panels.values()]).tolist()))
     for ax, (title, (v, which)) in zip(axes[0], panels.items()):
         rgb, ext = state_slice(v, z, which, lo=cam.lo[:2], hi=cam.hi[:2], present=present)
         ax.imshow(rgb, origin="lower", extent=ext, interpolation="nearest")
         ax.set_title(title, fontsize=9.5)
         ax.set_xlabel("x [m]")
-        ax.set_ylabel("y [m]")
+        if not fit or ax is axes[0][0]:
+            ax.set_ylabel("y [m]")
     from .palette import class_names
     v = next(iter(panels.values()))[0]
     K = v.probs.shape[1]
