@@ -365,13 +365,10 @@ def test_3d_view_loads_on_a_click(driver, book_url, shots):
     assert not errors, f"{INTERACTIVE_PAGE}: console errors after loading the 3D view: {errors}"
 
 
-@pytest.mark.xfail(strict=False, reason=(
-    "plotly's 3D camera calls preventDefault on every wheel event over the plot, scrollZoom off or "
-    "not (its mouse-wheel listener is registered with noScroll): the page of the view "
-    "(hw4/bki/interactive.py) must stop the wheel before it reaches the plot, e.g. a capture-phase "
-    "window listener calling stopPropagation() unless ctrlKey"))
 def test_wheel_over_the_loaded_3d_view_scrolls_the_page(driver, book_url):
-    """At 1400 px, once Task 5's 3D view is loaded, the wheel over it scrolls the page."""
+    """At 1400 px, once Task 5's 3D view is loaded, the wheel over it scrolls the page (plotly's 3D
+    camera cancels every wheel event over the plot: the view's page stops the wheel before it,
+    hw4/bki/interactive.py)."""
     _viewport(driver, WIDE)
     _load_view(driver, book_url)
     driver.execute_script("document.querySelector('.hw4-interactive-load').click()")

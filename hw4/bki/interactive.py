@@ -269,14 +269,24 @@ def _page_html(fig) -> str:
     (on a phone too: the page declares the device's width as its own, and the first view backs
     off on a screen taller than wide so that the map fits across). The mouse wheel does not zoom
     (``scrollZoom`` off: on a book page it scrolls the page instead of being trapped by the view;
-    zoom with the tool bar's zoom mode, dragging up or down). The page never scrolls: the
+    zoom with the tool bar's zoom mode, dragging up or down; the wheel is stopped before plotly's
+    3D camera, which would cancel it, so that it scrolls the book page around the frame). The page never scrolls: the
     plot fills it exactly, and a scroll bar would narrow the window and call up the other one."""
     html = fig.to_html(include_plotlyjs="plotly.min.js", full_html=True, div_id="map3d",
                        default_width="100%", default_height="100%", post_script=_FIT_CAMERA,
                        config=dict(displaylogo=False, scrollZoom=False, responsive=True))
     return html.replace("<head>", "<head><title>3D semantic map</title>"
                         '<meta name="viewport" content="width=device-width, initial-scale=1">'
-                        "<style>html,body{height:100%;margin:0;overflow:hidden}</style>", 1)
+                        "<style>html,body{height:100%;margin:0;overflow:hidden}</style>"
+                        + _WHEEL_TO_PAGE, 1)
+
+
+# plotly's 3D camera cancels every wheel event over the plot, scrollZoom off or not, so a book page
+# would stop scrolling under the cursor: the view's own page stops the wheel before plotly sees it
+# (capture phase), and the browser hands the scroll on to the book page around the frame. A pinch
+# on a touchpad arrives as a wheel event with ctrlKey and still reaches the plot.
+_WHEEL_TO_PAGE = ('<script>window.addEventListener("wheel", function (e) {'
+                  ' if (!e.ctrlKey) { e.stopPropagation(); } }, {capture: true});</script>')
 
 
 def copy_page(src, dest_folder) -> Path:
