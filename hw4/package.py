@@ -12,7 +12,7 @@ Gradescope takes two attachments (handout, "Submission Instructions"):
 Task 5 asks for "a video of the mapping sequence included in the submission": the tgz also holds
 ``NAME_hw4/videos/`` with the mapping videos the Task 5 chapter shows (:data:`VIDEOS`: RViz while
 the reference package maps SemanticKITTI sequence 04, recorded by ``scripts/reference_ros.sh``,
-and ours of sequence 04 and the toy scans), or the files given with ``--video``.
+and ours of the same scans), or the files given with ``--video``.
 
 The four files in ``hw4/`` are thin faces over the package's shared core (``template``,
 ``evidence``, ``grid``, ``sensor``, ``kernel``, ``posterior``, ...). So that they run next to the
@@ -54,10 +54,10 @@ CLASSES = {"ogm_CSM": "ogm_CSM", "ogm_continuous_CSM": "ogm_continuous_CSM",
 PDF_CANDIDATES = ("_build/hw4_report.pdf",)
 """The report edition's PDF (``bash scripts/build_book.sh report``), relative to the project."""
 UNIQNAME = re.compile(r"[a-z0-9]{1,8}")
-VIDEOS = ("notebooks/_static/t5_rviz_kitti04_mapping.mp4", "notebooks/_static/t5_kitti04_mapping.mp4",
-          "notebooks/_static/bki_mapping.mp4")
-"""The Task 5 mapping videos, relative to the project: RViz running the reference package
-(``scripts/reference_ros.sh --book``), ours (written by notebooks/T5_bki_3d.ipynb)."""
+VIDEOS = ("notebooks/_static/t5_rviz_kitti04_mapping.mp4", "notebooks/_static/t5_kitti04_mapping.mp4")
+"""The Task 5 mapping videos of sequence 04 the report names, relative to the project: RViz
+running the reference package (``scripts/reference_ros.sh --book``) and ours (written by
+notebooks/T5_bki_3d.ipynb). The toy example's video stays in the course book."""
 VIDEO_SUFFIXES = (".mp4", ".gif", ".webm", ".mkv", ".mov", ".avi")
 
 README = """\
@@ -298,17 +298,21 @@ def find_pdf(pdf: str | Path | None = None) -> Path:
                      "`bash scripts/build_book.sh report` first, or pass --pdf PATH.")
 
 
-def build_named_pdf(name: str) -> Path | None:
+def build_named_pdf(name: str, date: str | None = None) -> Path | None:
     """Build the report edition with ``name`` on its title page; return its path.
 
-    Runs ``scripts/build_book.sh report`` with ``HW4_BOOK_AUTHOR=name`` (the report's author),
-    which writes ``_build/hw4_report.pdf``. Returns None when this checkout has no build script
+    Runs ``scripts/build_book.sh report`` with ``HW4_BOOK_AUTHOR=name`` (the report's author and
+    the PDF's metadata author) and, with ``date``, ``HW4_REPORT_DATE=date`` (the title page's
+    date; without it the handout's term, "Winter 2023"), which writes ``_build/hw4_report.pdf``. Returns None when this checkout has no build script
     (then the report already built is used).
     """
     script = PROJECT_ROOT / "scripts" / "build_book.sh"
     if not script.is_file():
         return None
     env = dict(os.environ, HW4_BOOK_AUTHOR=name)
+    env.pop("HW4_REPORT_DATE", None)
+    if date:
+        env["HW4_REPORT_DATE"] = date
     pdf = PROJECT_ROOT / PDF_CANDIDATES[0]
     # the build removes the old PDF first: keep a copy to fall back on if it fails
     backup = None
@@ -366,7 +370,7 @@ def _reset(info: tarfile.TarInfo) -> tarfile.TarInfo:
 
 
 def build_package(uniqname: str, pdf: str | Path | None = None, out: str | Path = ".",
-                  force: bool = False, videos=None) -> tuple[Path, Path]:
+                  force: bool = False, videos=None, date: str | None = None) -> tuple[Path, Path]:
     """Write ``NAME_hw4.tgz`` and ``NAME_hw4.pdf`` into ``out``; return their paths.
 
     Parameters
@@ -383,11 +387,17 @@ def build_package(uniqname: str, pdf: str | Path | None = None, out: str | Path 
         Overwrite an existing ``NAME_hw4.tgz`` / ``NAME_hw4.pdf``.
     videos : list of paths, optional
         Videos for ``NAME_hw4/videos/`` (default: :data:`VIDEOS`).
+    date : str, optional
+        The report's title-page date (default: the handout's term, "Winter 2023"); only used
+        when the report is built here (no ``pdf``).
     """
     from .core.atomic import Outputs
 
     name = validate_uniqname(uniqname)
-    pdf_path = find_pdf(pdf if pdf is not None else build_named_pdf(name))
+    if date is not None and (not date.strip() or len(date) > 40 or "\n" in date):
+        raise InputError(f"--date {date!r} is not a date for the title page: give a short "
+                         "line such as 'March 17, 2023'.")
+    pdf_path = find_pdf(pdf if pdf is not None else build_named_pdf(name, date))
     video_paths = find_videos(videos)
     out = Path(out)
     tgz, pdf_out = out / f"{name}_hw4.tgz", out / f"{name}_hw4.pdf"
@@ -442,7 +452,7 @@ def _write_package(name: str, pdf_path: Path, tmp: Path, o, same_pdf: bool,
 
 def _run(args: argparse.Namespace) -> int:
     tgz, pdf = build_package(args.uniqname, pdf=args.pdf, out=args.out, force=args.force,
-                             videos=getattr(args, "video", None))
+                             videos=getattr(args, "video", None), date=getattr(args, "date", None))
     print(f"wrote {tgz} and {pdf}: upload both to Gradescope")
     return 0
 
@@ -462,7 +472,10 @@ def register(subparsers) -> argparse.ArgumentParser:
     p.add_argument("--out", default=".", help="output folder (default: current folder)")
     p.add_argument("--video", action="append", default=None, metavar="PATH",
                    help="a Task 5 video for NAME_hw4/videos/ (repeat for more; default: the "
-                        "sequence 04 and toy mapping videos of the Task 5 chapter)")
+                        "two sequence 04 mapping videos the report names: RViz's and ours)")
+    p.add_argument("--date", default=None,
+                   help="the date on the report's title page (default: the handout's term, "
+                        "'Winter 2023')")
     p.add_argument("--force", action="store_true", help="overwrite existing output files")
     p.set_defaults(func=_run)
     return p

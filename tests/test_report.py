@@ -3,6 +3,7 @@ the handout asks for, no code, and the book's glued numbers byte for byte."""
 from __future__ import annotations
 
 import json
+import re
 import shutil
 import subprocess
 import sys
@@ -72,6 +73,11 @@ def test_title_page_names_the_student(sources):
     assert yaml.safe_load(report._config("J_Doe & Co"))["author"] == r"J\_Doe \& Co"
     unnamed = yaml.safe_load(report._config(None))
     assert "no student name" in unnamed["sphinx"]["config"]["hw4_course_author"]
+    # the date is the handout's term, or the student's, never the build day
+    cfg = yaml.safe_load((out / "_config.yml").read_text())
+    assert cfg["sphinx"]["config"]["today"] == "Winter 2023"
+    dated = yaml.safe_load(report._config("Jane Doe", "March 17, 2023"))
+    assert dated["sphinx"]["config"]["today"] == "March 17, 2023"
 
 
 def test_unknown_figure_or_caption_reference_stops_the_build(tmp_path):
@@ -87,39 +93,85 @@ def test_unknown_figure_or_caption_reference_stops_the_build(tmp_path):
         report.build_sources(tmp_path / "src", report_dir=texts)
 
 
-def test_background_equations_get_the_books_numbers():
+def test_a_caption_citing_the_books_equations_stops_the_build():
+    """The report cites no equation of the book: its captions carry the equations they need."""
     eqs = report.background_equations()
     assert list(eqs.values())[:3] == ["B.1", "B.2", "B.3"]
-    text = report._fix_refs("the mean of {eq}`eq-beta-moments`, white", set(), eqs, "x")
-    assert text == f"the mean (course book, Eq.\u00a0{eqs['eq-beta-moments']}), white"
+    with pytest.raises(InputError, match="eq-beta-moments"):
+        report._fix_refs("the mean of {eq}`eq-beta-moments`, white", set(), eqs, "x")
     kept = "as {numref}`fig-t1-var` shows"
     assert report._fix_refs(kept, {"fig-t1-var"}, eqs, "x") == kept
+
+
+def test_the_reports_own_caption_replaces_the_chapters(sources, tmp_path):
+    out, _ = sources
+    for task in report.TASKS:  # every figure of the report has the report's caption
+        text = (report.REPORT_DIR / f"task{task}.md").read_text()
+        marks = report.MARK.findall(text)
+        assert len(re.findall(r"^<!-- caption$", text, re.M)) == len(marks), f"task{task}.md"
+    fig = report.figure_cells(_nb(out / "task1.ipynb"))["fig-t1-map"]
+    assert fig["metadata"]["mystnb"]["figure"]["caption"].startswith("Discrete CSM of the Intel")
+    assert "{eq}" not in fig["metadata"]["mystnb"]["figure"]["caption"]
+    # a Markdown {figure} block keeps its options and takes the report's caption
+    texts = tmp_path / "texts"
+    shutil.copytree(report.REPORT_DIR, texts)
+    (texts / "task5.md").write_text("# Task 5\n\n<!-- figure: fig-t5-rviz-close width=50% -->\n"
+                                    "<!-- caption\nMy own words.\n-->\nAfter.\n")
+    report.build_sources(tmp_path / "src", report_dir=texts)
+    t5 = "".join(c["source"] for c in _nb(tmp_path / "src" / "task5.ipynb")["cells"]
+                 if c["cell_type"] == "markdown")
+    assert ":name: fig-t5-rviz-close\n" in t5 and ":width: 50%" in t5
+    assert "My own words." in t5 and "After." in t5 and "Xvfb" not in t5
 
 
 def test_task5_requires_rviz_figures_when_the_chapter_has_them(tmp_path):
     t5 = {"cells": [{"cell_type": "code", "metadata": {"mystnb": {"figure": {"name": n}}},
                      "outputs": [{"data": {"image/png": ""}}], "source": ""}
-                    for n in ("fig-t5-rviz-bki", "fig-t5-kitti-3d")]}
-    assert report.required_figures(t5)[5] == ["fig-t5-rviz-bki"]
+                    for n in ("fig-t5-rviz-kitti", "fig-t5-rviz-toy", "fig-t5-kitti-3d")]}
+    assert report.required_figures(t5)[5] == ["fig-t5-rviz-kitti"]  # sequence 04, not the toy
     t5["cells"].pop(0)
     assert report.required_figures(t5)[5] == report.T5_FALLBACK
     tex = tmp_path / "r.tex"
     tex.write_text(r"\label{\detokenize{task5:fig-t5-kitti-3d}}")
-    assert report.missing_figures(tex, {5: ["fig-t5-kitti-3d", "fig-t5-rviz-bki"]}) == [
-        "fig-t5-rviz-bki"]
+    assert report.missing_figures(tex, {5: ["fig-t5-kitti-3d", "fig-t5-rviz-kitti"]}) == [
+        "fig-t5-rviz-kitti"]
 
 
-def test_report_builds_with_every_required_figure_labelled(sources):
-    """The LaTeX build (warnings as errors) of the report; its labels checked against the list."""
+FORBIDDEN = re.compile(r"scripts/|_build|\.venv|notebooks/|\bhw4\.|python -m|\bbash\b|\bXvfb\b|"
+                       r"verified data|course book|no student name|\.ipynb|\.sh\b|--\w")
+"""Repository paths, command lines, tool and build words: none belongs in the report's text
+(the Task 5 answer names the handout's own commands, catkin_make and roslaunch, on purpose)."""
+
+
+def test_report_builds_with_the_name_every_figure_and_no_build_details(sources):
+    """The PDF build (warnings as errors, about 40 s): every required figure labelled, the
+    student's name on the title page and in the PDF's metadata, the handout's term as the date,
+    no repository path or command line in the text, no sentence twice, at most 15 pages."""
     out, _ = sources
     jb = Path(sys.executable).with_name("jupyter-book")
-    res = subprocess.run([str(jb), "build", str(out), "--builder", "latex", "-W", "-n",
+    if not (shutil.which("xelatex") and shutil.which("latexmk") and shutil.which("pdftotext")):
+        pytest.skip("the PDF needs TeX Live and poppler-utils (scripts/setup.sh installs them)")
+    res = subprocess.run([str(jb), "build", str(out), "--builder", "pdflatex", "-W", "-n",
                           "--keep-going"], capture_output=True, text=True)
     assert res.returncode == 0, res.stdout[-3000:] + res.stderr[-3000:]
     tex = out / "_build" / "latex" / "hw4_report.tex"
     assert report.missing_figures(tex) == []
-    text = tex.read_text()
-    assert "sphinxVerbatimInput" not in text  # no code cell input
+    assert "sphinxVerbatimInput" not in tex.read_text()  # no code cell input
+    pdf = out / "_build" / "latex" / "hw4_report.pdf"
+    info = subprocess.run(["pdfinfo", str(pdf)], capture_output=True, text=True).stdout
+    assert re.search(r"^Author:\s+Jane Doe$", info, re.M), info
+    assert int(re.search(r"^Pages:\s+(\d+)", info, re.M).group(1)) <= 15
+    title = subprocess.run(["pdftotext", "-f", "1", "-l", "1", str(pdf), "-"],
+                           capture_output=True, text=True).stdout
+    assert "Jane Doe" in title and "Winter 2023" in title, title
+    text = subprocess.run(["pdftotext", str(pdf), "-"], capture_output=True, text=True).stdout
+    bad = sorted({m.group(0) for m in FORBIDDEN.finditer(text)})
+    assert not bad, f"build details in the report's text: {bad}"
+    flat = re.sub(r"\s+", " ", re.sub(r"-\n", "", text))
+    sentences = [s.strip() for s in re.split(r"(?<=[.:;])\s+(?=[A-Z])", flat)
+                 if len(s.strip()) > 60]
+    twice = sorted({s for s in sentences if sentences.count(s) > 1})
+    assert not twice, f"sentences printed twice: {twice}"
 
 
 def test_markers_pick_figures_by_name_pattern_and_fallback():
@@ -137,3 +189,13 @@ def test_videos_named_are_the_chapters_that_exist():
     assert report.chapter_videos(t5) == ["bki_mapping.mp4"]
     assert report.chapter_videos({"cells": []}) == [report.VIDEO]
     assert report._video_text(["a", "b", "c"]) == "`a`, `b` and `c`"
+
+
+def test_package_refuses_a_date_that_is_no_title_page_line(tmp_path, monkeypatch):
+    """``python -m hw4 package --date``: one line for the title page, refused before any build."""
+    from hw4 import package
+    monkeypatch.setattr(package, "build_named_pdf", lambda *a: pytest.fail("built anyway"))
+    for bad in ("", "   ", "a\nb", "x" * 41):
+        with pytest.raises(InputError, match="--date"):
+            package.build_package("jdoe", out=tmp_path, date=bad)
+    assert list(tmp_path.iterdir()) == []

@@ -14,10 +14,12 @@ builds it into ``_build/hw4_report.pdf``. Each task notebook is made of
    (myst-nb ``mystnb.figure.name`` metadata, or a ``:name:`` option). ``<!-- figure: A or B C -->``
    takes A when the chapter has it, else B and C; a name may end in ``*`` (every match, in
    chapter order); ``<!-- figure: NAME width=85% -->`` prints it at that share of the text width.
+   A figure marker may be followed at once by the report's own caption for it,
+   ``<!-- caption`` ... ``-->`` (the caption written for the grader, instead of the chapter's).
 
-A caption's reference to something the report does not hold is rewritten: an equation of the
-background chapter becomes "(course book, Eq. B.k)" (the book's own number); any other
-missing target stops the build with one sentence. :data:`REQUIRED` lists the figures the
+A caption's reference to something the report does not hold (a figure of the book only, or an
+equation of the book: the report cites none, its captions carry the equations they need) stops
+the build with one sentence. :data:`REQUIRED` lists the figures the
 handout asks for; :func:`missing_figures` checks a built report's LaTeX for their labels.
 """
 from __future__ import annotations
@@ -46,14 +48,14 @@ REQUIRED = {
     2: ["fig-t2-map", "fig-t2-var", "fig-t2-res-027", "fig-t2-res-05"],
     3: ["fig-t3-map", "fig-t3-var"],
     4: ["fig-t4-map", "fig-t4-var", "fig-t4-res-027", "fig-t4-res-05"],
-    5: ["fig-t5-rviz-*"],
+    5: ["fig-t5-rviz-kitti", "fig-t5-rviz-top", "fig-t5-rviz-close"],
 }
 """The figures the handout asks for, by task (its "visualize your map ... and its variance",
 "generate the map and the variance map using grid_size = [0.135, 0.270, 0.5]" of Tasks 2B and
 4B, whose 0.135 m maps are those of 2A / 4A, and Task 5's screenshots of the semantic map).
-Task 5's screenshots are the RViz figures ``fig-t5-rviz-*`` (images, not the video) when the
-chapter has them; without
-them, :data:`T5_FALLBACK` (the chapter's renders of the same map) stand in, as the chapter says."""
+Task 5's screenshots are the chapter's RViz screenshots of sequence 04 (images, not the video;
+those of them the chapter has, when it has any); without them, :data:`T5_FALLBACK` (the
+chapter's renders of the same map) stand in, as the chapter says."""
 T5_FALLBACK = ["fig-t5-kitti-3d", "fig-t5-kitti-top"]
 VIDEO = "t5_kitti04_mapping.mp4"
 """The Task 5 mapping video named when the chapter's video files are not there."""
@@ -78,6 +80,10 @@ def _video_text(names: list[str]) -> str:
     return code[0] if len(code) == 1 else ", ".join(code[:-1]) + " and " + code[-1]
 
 MARK = re.compile(r"^<!--\s*(figure|table):\s*(.+?)\s*-->\s*$", re.M)
+CAPTION = re.compile(r"\A\s*<!--\s*caption\s*\n(.*?)\n\s*-->[ \t]*\n?", re.S)
+"""The report's own caption of the figure whose marker it follows."""
+TERM = "Winter 2023"
+"""The title page's date when the student sets none: the handout's term (not the build day)."""
 REF = re.compile(r"(?:\bof )?\{(numref|ref|eq|doc)\}`([^`]*)`")
 GLUE_MIME = "application/papermill.record/"
 SRC = "_build/report_src"
@@ -186,27 +192,30 @@ def _fix_refs(text: str, defined: set[str], equations: dict[str, str], where: st
         label = re.sub(r"^.*<(.*)>$", r"\1", target)
         if label in defined:
             return m.group(0)
-        if role == "eq" and label in equations:  # "E of {eq}`x`" -> "E (course book, Eq. B.8)"
-            return f"(course book, Eq.\u00a0{equations[label]})"
+        if role == "eq":
+            raise InputError(f"{where} cites the book's equation {label!r}; the report cites no "
+                             "equation of the book: give the figure its own caption in the "
+                             "report's text, with the equation it needs.")
         raise InputError(f"{where} refers to {label!r}, which the report does not hold: add it "
                          "to the report or pick another figure.")
     return REF.sub(sub, text)
 
 
 def required_figures(t5: dict | None = None) -> dict[int, list[str]]:
-    """:data:`REQUIRED` with Task 5's patterns resolved against the Task 5 chapter: its RViz
-    figures when it has any, else :data:`T5_FALLBACK`."""
+    """:data:`REQUIRED` with Task 5's screenshots resolved against the Task 5 chapter: those of
+    its RViz screenshots of sequence 04 it has, if any, else :data:`T5_FALLBACK`."""
     t5 = t5 if t5 is not None else _load(ROOT / TASKS[5])
     names = list(figure_cells(t5, videos=False))  # screenshots, not the video's still
     out = {task: list(figs) for task, figs in REQUIRED.items()}
-    rviz = _pick(" ".join(REQUIRED[5]), names)
+    rviz = [n for n in REQUIRED[5] if n in names]
     out[5] = rviz or list(T5_FALLBACK)
     return out
 
 
-def _plan(task: int, text: str, nb: dict) -> list[tuple[str, str]]:
-    """The report text of one task cut into ``("md", text)``, ``("figure", name)`` and
-    ``("table", name)`` pieces, the markers resolved against the chapter ``nb``."""
+def _plan(task: int, text: str, nb: dict) -> list[tuple]:
+    """The report text of one task cut into ``("md", text)``, ``("figure", name, caption)`` and
+    ``("table", name, None)`` pieces (``name`` possibly followed by `` width``; ``caption`` the
+    report's own or None), the markers resolved against the chapter ``nb``."""
     figures, tables = figure_cells(nb, folder=_folder(task)), _blocks(nb, "table")
     videos = frozenset(figures) - set(figure_cells(nb, videos=False, folder=_folder(task)))
     parts = MARK.split(text)  # [text, kind, spec, text, kind, spec, ..., text]
@@ -221,8 +230,15 @@ def _plan(task: int, text: str, nb: dict) -> list[tuple[str, str]]:
         if not names:
             raise InputError(f"report/task{task}.md asks for the {kind} {spec!r}, which "
                              f"{TASKS[task]} does not have.")
+        caption = CAPTION.match(after)
+        if caption:
+            after = after[caption.end():]
+            if len(names) > 1:
+                raise InputError(f"report/task{task}.md gives one caption to the {len(names)} "
+                                 f"figures of {spec!r}; give each its own marker.")
         for name in names:
-            pieces.append((kind, name) if not width else (kind, f"{name} {width.group(1)}"))
+            pieces.append((kind, name if not width else f"{name} {width.group(1)}",
+                           " ".join(caption.group(1).split()) if caption else None))
         pieces.append(("md", after))
     return pieces
 
@@ -237,7 +253,7 @@ def task_notebook(task: int, text: str, nb: dict, equations: dict[str, str],
     cells = glue_cells(nb)
     placed: list[str] = []
     pieces = _plan(task, text, nb)
-    defined = {n.split()[0] for k, n in pieces if k in ("figure", "table")} | set(elsewhere)
+    defined = {p[1].split()[0] for p in pieces if p[0] in ("figure", "table")} | set(elsewhere)
     defined |= set(re.findall(r"^\(([\w-]+)\)=", text, re.M))
     md: list[str] = []
 
@@ -248,11 +264,12 @@ def task_notebook(task: int, text: str, nb: dict, equations: dict[str, str],
             cells.append({"cell_type": "markdown", "id": f"r{task}-{len(cells)}",
                           "metadata": {}, "source": body})
 
-    for kind, item in pieces:
+    for kind, item, *own in pieces:
         if kind == "md":
             md.append(item)
             continue
         item, *width = item.split()
+        own = own[0]
         if kind == "table":
             md.append("\n" + _fix_refs(tables[item], defined, equations,
                                        f"table {item} of {TASKS[task]}") + "\n")
@@ -264,6 +281,9 @@ def task_notebook(task: int, text: str, nb: dict, equations: dict[str, str],
                                                 _source(cell), re.M | re.S)
                          if re.search(r"^:name: " + re.escape(item) + r"\s*$", b.group(0), re.M)]
                 text = block[0].group(0)
+                if own is not None:  # the report's caption replaces the block's body
+                    head = re.match(r"```\{(?:figure|video)\}[^\n]*\n(?::[^\n]*\n)*", text)
+                    text = head.group(0) + "\n" + own + "\n```"
                 if width:
                     text = re.sub(r"^:width: .*$", f":width: {width[0]}", text, flags=re.M)
                 md.append("\n" + _fix_refs(text, defined, equations,
@@ -277,7 +297,8 @@ def task_notebook(task: int, text: str, nb: dict, equations: dict[str, str],
             meta = new["metadata"]
             meta["tags"] = ["remove-input"]
             fig = meta["mystnb"]["figure"]
-            fig["caption"] = _fix_refs(fig.get("caption", ""), defined, equations,
+            fig["caption"] = _fix_refs(own if own is not None else fig.get("caption", ""),
+                                       defined, equations,
                                        f"the caption of {item}")
             if width:  # printed narrower than the book prints it (mystnb image options)
                 meta["mystnb"]["image"] = {"width": width[0]}
@@ -296,8 +317,22 @@ def _latex_text(text: str) -> str:
     return "".join(special.get(c, c) for c in text)
 
 
-def _config(name: str | None) -> str:
-    """The report's ``_config.yml``: the book's PDF settings with the report's title and author."""
+REPORT_PREAMBLE = r"""
+% the report edition: chapters run on (no new page), headed by their title only
+\makeatletter
+\renewcommand{\chapter}{\par\FloatBarrier\vspace{1.2em}\global\@topnum\z@
+  \@afterindentfalse\secdef\@chapter\@schapter}
+\renewcommand{\@makechapterhead}[1]{{\parindent\z@\raggedright\normalfont\LARGE\bfseries
+  #1\par\nobreak\vskip 10\p@}}
+\renewcommand{\@makeschapterhead}[1]{{\parindent\z@\raggedright\normalfont\LARGE\bfseries
+  #1\par\nobreak\vskip 10\p@}}
+\makeatother
+"""
+
+
+def _config(name: str | None, date: str | None = None) -> str:
+    """The report's ``_config.yml``: the book's PDF settings with the report's title, author
+    (the student; also the PDF's metadata) and date (``date``, else the handout's term)."""
     import yaml
 
     book = yaml.safe_load((ROOT / "_config.yml").read_text())
@@ -323,11 +358,20 @@ def _config(name: str | None) -> str:
     # a report of about 15 pages: no contents page (five chapters)
     elements = sc.setdefault("latex_elements", {})
     elements["tableofcontents"] = ""
-    # figures where the text puts them, each followed by its answer (a report is read in order)
-    elements["figure_align"] = "H"
+    # figures float near their text (the book's "!htp" and float settings; flafter keeps each
+    # after its anchor): a figure too tall for the rest of a page goes to the next one while the
+    # answer's text fills the gap, instead of leaving the page half empty. The answers cite
+    # every figure by number.
+    elements["figure_align"] = "!htbp"
+    # a task starts on the page where the last one ends, after all its figures (placeins'
+    # \FloatBarrier), under a compact heading ("Task N: ..." is the chapter's own title, the
+    # book's "Chapter N" banner would repeat it)
+    elements["fncychap"] = ""
+    elements["preamble"] = elements.get("preamble", "") + REPORT_PREAMBLE
     sc["latex_additional_files"] = [str(ROOT / f) for f in
                                     book["sphinx"]["config"].get("latex_additional_files", [])]
     sc["hw4_course_author"] = "" if name else "Homework report (no student name given)"
+    sc["today"] = date or TERM  # the title page's date, never the build day
     sc["extensions"] = ["sphinx_togglebutton", "sphinx_copybutton", "myst_nb", "jupyter_book",
                         "sphinx_comments", "sphinx_external_toc", "sphinx_design",
                         "sphinx_book_theme", "hw4_book"]
@@ -335,7 +379,7 @@ def _config(name: str | None) -> str:
 
 
 def build_sources(out: str | Path = SRC, name: str | None = None, root: Path = ROOT,
-                  report_dir: Path | None = None) -> dict[int, list[str]]:
+                  report_dir: Path | None = None, date: str | None = None) -> dict[int, list[str]]:
     """Write the report's Jupyter Book source into ``out``; return the figures of each task.
 
     Nothing is written when a marker or a caption's reference cannot be resolved
@@ -351,12 +395,13 @@ def build_sources(out: str | Path = SRC, name: str | None = None, root: Path = R
             raise InputError(f"{text_path} is missing: the report has one text per task.")
         nbs[task] = _load(root / rel)
         texts[task] = text_path.read_text(encoding="utf-8").replace("{{video}}", videos)
-    names = {n.split()[0] for t in TASKS for k, n in _plan(t, texts[t], nbs[t]) if k != "md"}
+    names = {p[1].split()[0] for t in TASKS for p in _plan(t, texts[t], nbs[t]) if p[0] != "md"}
     for task in TASKS:
         books[task], placed[task] = task_notebook(task, texts[task], nbs[task], equations, names)
     intro = (report_dir / "intro.md").read_text(encoding="utf-8")
-    who = name or "(no name given: `python -m hw4 package --uniqname NAME` names the student)"
-    intro = intro.replace("{{student}}", who).replace("{{video}}", videos)
+    who = name or "(no name given)"
+    intro = (intro.replace("{{student}}", who).replace("{{video}}", videos)
+             .replace("{{date}}", date or TERM))
     if out.exists():
         shutil.rmtree(out)
     out.mkdir(parents=True)
@@ -367,7 +412,7 @@ def build_sources(out: str | Path = SRC, name: str | None = None, root: Path = R
     (out / "_toc.yml").write_text(
         "format: jb-book\nroot: intro\nparts:\n  - numbered: true\n    chapters:\n"
         + "".join(f"      - file: task{t}\n" for t in TASKS), encoding="utf-8")
-    (out / "_config.yml").write_text(_config(name), encoding="utf-8")
+    (out / "_config.yml").write_text(_config(name, date), encoding="utf-8")
     static = root / "notebooks" / "_static"  # the stills of {video} figures
     if static.is_dir():
         os.symlink(static, out / "_static", target_is_directory=True)
@@ -386,10 +431,12 @@ def main(argv=None) -> int:
     p = argparse.ArgumentParser(prog="python -m hw4.book.report",
                                 description="Write the report edition's Jupyter Book source.")
     p.add_argument("--name", default=None, help="the student's name for the title page")
+    p.add_argument("--date", default=os.environ.get("HW4_REPORT_DATE") or None,
+                   help=f"the title page's date (default: $HW4_REPORT_DATE, else {TERM!r})")
     p.add_argument("--out", default=str(ROOT / SRC), help=f"output folder (default: {SRC})")
     args = p.parse_args(argv)
     try:
-        placed = build_sources(args.out, args.name)
+        placed = build_sources(args.out, args.name, date=args.date)
     except InputError as e:
         print(f"report: {e}", file=sys.stderr)
         return 2
