@@ -324,6 +324,10 @@ REPORT_PREAMBLE = r"""
   \@afterindentfalse\secdef\@chapter\@schapter}
 \renewcommand{\@makechapterhead}[1]{{\parindent\z@\raggedright\normalfont\LARGE\bfseries
   #1\par\nobreak\vskip 10\p@}}
+% the footer holds the page number only (chapters run on, so a chapter or section mark
+% would name the section a page starts in, not the one it is mostly about)
+\AtBeginDocument{\renewcommand{\chaptermark}[1]{}\renewcommand{\sectionmark}[1]{}%
+  \renewcommand{\subsectionmark}[1]{}\markboth{}{}}
 \renewcommand{\@makeschapterhead}[1]{{\parindent\z@\raggedright\normalfont\LARGE\bfseries
   #1\par\nobreak\vskip 10\p@}}
 \makeatother
