@@ -41,7 +41,7 @@ die() { echo "reference_ros: $*" >&2; exit 1; }
 # ----------------------------------------------------------------------------- 1. packages
 DEBS="catkin libroscpp-dev rosbash python3-roslaunch python3-rosbag python3-rostopic libpcl-ros-dev \
 libtf-conversions-dev libvisualization-msgs-dev libnav-msgs-dev libgeometry-msgs-dev libopencv-dev \
-rviz xvfb xauth ffmpeg"
+python3-tf2-msgs rviz xvfb xauth ffmpeg"
 need_install=0
 for tool in catkin_make roslaunch roscore rostopic rviz Xvfb ffmpeg; do
     command -v "$tool" >/dev/null 2>&1 || need_install=1
@@ -49,6 +49,7 @@ done
 [ -x /usr/lib/rosbag/record ] || need_install=1
 [ -e /usr/include/pcl_ros/point_cloud.h ] || need_install=1
 [ -e /usr/include/tf_conversions/tf_eigen.h ] || need_install=1
+[ -d /usr/lib/python3/dist-packages/tf2_msgs ] || need_install=1
 if [ "$need_install" = 1 ]; then
     if [ "$(id -u)" = 0 ] && command -v apt-get >/dev/null 2>&1; then
         say "1/7 installing the ROS 1 packages of Debian (about 350 MB, several minutes)"
@@ -269,6 +270,14 @@ bag_run() {  # bag_run NAME LAUNCH DONE_PATTERN DONE_COUNT TOPICS...: run a laun
 
 say "6/7 running the nodes (ROS_MASTER_URI=$ROS_MASTER_URI)"
 start_master
+# The package publishes its markers in the frame "map", its RViz configurations' fixed frame, but
+# no transform at all, so RViz reports "Fixed Frame: No TF data" and an error on every MarkerArray
+# display ("frame [map] does not exist"), although it draws the markers. A latched identity
+# transform from "map" (to a frame of no use) makes "map" known to TF: the panels show no error.
+rostopic pub -l /tf_static tf2_msgs/TFMessage \
+    '{transforms: [{header: {frame_id: map}, child_frame_id: map_origin, transform: {rotation: {w: 1.0}}}]}' \
+    > "$LOG/tf_static.log" 2>&1 &
+PIDS+=("$!")
 for src in clean noisy; do
     ln -sfn "predictions_$src" "$KD/predictions"
     say "   semantickitti_node, $NSCANS scans, $src labels, without RViz"
@@ -290,7 +299,7 @@ if [ "$RVIZ" = 1 ]; then
     say "   roslaunch semantic_bki semantickitti_node.launch with RViz, recording the screen"
     ffmpeg -loglevel error -y -f x11grab -draw_mouse 0 -framerate 10 -video_size 1854x1056 \
         -i ":$DISP+167,307" -c:v libx264 -preset veryfast -pix_fmt yuv420p -crf 26 \
-        -vf "scale=1280:-2" "$OUT/rviz_kitti04_mapping.mp4" > "$LOG/ffmpeg.log" 2>&1 &
+        -vf "scale=1280:-2" "$OUT/rviz_kitti04_mapping_raw.mp4" > "$LOG/ffmpeg.log" 2>&1 &
     FF=$!
     FF_T0=$(date +%s.%N)
     PIDS+=("$FF")
@@ -333,7 +342,14 @@ if [ "$RVIZ" = 1 ]; then
     # (the video is 1280 px wide; RViz's 3D view is the region 812 x 624 at (265, 43))
     "$PY" -c "import sys; from hw4.bki.rosref import video_strip as v; \
 v(sys.argv[1], sys.argv[2], float(sys.argv[3]), sys.argv[4], crop='812:624:265:43')" \
-        "$OUT/rviz_kitti04_mapping.mp4" "$OUT/kitti04_rviz.bag" "$FF_T0" "$OUT/rviz_kitti04_mapping_strip.png"
+        "$OUT/rviz_kitti04_mapping_raw.mp4" "$OUT/kitti04_rviz.bag" "$FF_T0" "$OUT/rviz_kitti04_mapping_strip.png"
+    # the video from the first frame with the map drawn in the 3D view (the recording starts with
+    # a black screen, RViz's splash and its empty window), and its poster frame (the whole map)
+    "$PY" -c "import sys; from hw4.bki import render as r; \
+t = r.first_coloured_frame(sys.argv[1], crop='812:624:265:43', ffmpeg='ffmpeg'); \
+r.trim_video(sys.argv[1], sys.argv[2], t, ffmpeg='ffmpeg'); \
+r.video_poster(sys.argv[2], sys.argv[3], ffmpeg='ffmpeg'); print(f'   video from {t:.1f} s on')" \
+        "$OUT/rviz_kitti04_mapping_raw.mp4" "$OUT/rviz_kitti04_mapping.mp4" "$OUT/rviz_kitti04_mapping_poster.jpg"
 fi
 
 # ----------------------------------------------------------------------------- 7. compare
@@ -359,7 +375,8 @@ EOF
 fi
 if [ "$BOOK" = 1 ] && [ "$RVIZ" = 1 ]; then
     say "copying the screenshots and the video to notebooks/_static (t5_rviz_*)"
-    for f in "$OUT"/rviz_kitti04*.png "$OUT"/rviz_toy_*.png "$OUT"/rviz_kitti04_mapping.mp4; do
+    for f in "$OUT"/rviz_kitti04*.png "$OUT"/rviz_toy_*.png "$OUT"/rviz_kitti04_mapping.mp4 \
+            "$OUT"/rviz_kitti04_mapping_poster.jpg; do
         cp "$f" "$ROOT/notebooks/_static/t5_$(basename "$f")"
     done
     # the published maps, compactly, for the chapter's comparison (the bags are 40 MB each)

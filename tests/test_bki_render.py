@@ -107,3 +107,48 @@ def test_fitted_slices_are_as_tall_as_the_map_needs():
     fig = render.plot_slices(panels, z=1.0, cam=cam, width=2.0)  # the default keeps its layout
     assert tuple(fig.get_size_inches()) == (4.0, 2.3) and fig.axes[1].get_ylabel() == "y [m]"
     plt.close(fig)
+
+
+def _recording(tmp_path, grey_s=2.0, map_s=1.0, fps=10):
+    """A screen recording as RViz's starts: black, then grey (the splash, the empty window), then a
+    map: a saturated square in the middle from ``grey_s`` [s] on. (64, 96) px, ``fps`` frames/s."""
+    frames = []
+    for k in range(int(round((grey_s + map_s) * fps))):
+        f = np.full((64, 96, 3), 0 if k < fps else 128, np.uint8)
+        if k >= grey_s * fps:
+            f[16:48, 32:64] = (230, 20, 200)   # magenta, a third of the 3D view's region below
+        frames.append(f)
+    render.write_video(frames, mp4_path=tmp_path / "rec.mp4", fps=fps)
+    return tmp_path / "rec.mp4"
+
+
+def test_recording_starts_at_the_first_frame_with_a_map_and_gets_a_poster(tmp_path):
+    rec = _recording(tmp_path)
+    assert render.first_coloured_frame(rec) == pytest.approx(2.0, abs=0.11)
+    # the region of interest: only the map's square, so a tiny fraction threshold is enough
+    assert render.first_coloured_frame(rec, crop="32:32:32:16") == pytest.approx(2.0, abs=0.11)
+    out = render.trim_video(rec, tmp_path / "cut.mp4", render.first_coloured_frame(rec))
+    frames = _decoded(out, (64, 96, 3))
+    assert 8 <= len(frames) <= 11                        # the last second only
+    assert render.first_coloured_frame(out) == 0.0      # starts with the map drawn
+    poster = render.video_poster(out, tmp_path / "cut_poster.jpg")
+    from PIL import Image
+    img = np.asarray(Image.open(poster).convert("RGB")).astype(int)
+    assert img.shape == (64, 96, 3) and img[32, 48, 0] > 180 and img[32, 48, 1] < 80
+    with pytest.raises(ValueError, match="must differ"):
+        render.trim_video(out, out, 0.0)
+
+
+def test_a_recording_without_a_map_is_refused(tmp_path):
+    rec = _recording(tmp_path, grey_s=2.0, map_s=0.0)
+    with pytest.raises(ValueError, match="no frame"):
+        render.first_coloured_frame(rec)
+
+
+def test_write_video_puts_the_last_frame_beside_the_mp4_as_its_poster(tmp_path):
+    from PIL import Image
+    render.write_video(_frames(), mp4_path=tmp_path / "v.mp4", fps=2)
+    poster = tmp_path / "v_poster.jpg"
+    assert render.poster_path(tmp_path / "v.mp4") == poster
+    img = np.asarray(Image.open(poster).convert("L")).astype(int)
+    assert img.shape == (16, 24) and abs(img.mean() - 100) < 3   # the last map, not the first

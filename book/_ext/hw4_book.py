@@ -13,12 +13,16 @@
         The caption.
         ```
 
-    ``:still:`` (the image the PDF prints in the player's place; the HTML player shows the first
-    frame) defaults to the video's path with ``_strip.png``, else ``.png``, for its suffix. Every
-    option of ``figure`` (``name``, ``width``, ``align``, ``alt``, ``class``, ``figwidth``)
-    applies; ``:html-width:`` sets the player's width when it should differ from the still's. The HTML
-    player is ``<video controls loop muted playsinline preload="auto">`` with a download link
-    as its fallback; the MP4 is copied into ``_downloads`` as ``{download}`` would.
+    ``:still:`` (the image the PDF prints in the player's place) defaults to the video's path
+    with ``_strip.png``, else ``.png``, for its suffix; ``:poster:`` (the frame the HTML player
+    shows before it plays: one with the map drawn) to the video's path with ``_poster.jpg``, which
+    must exist (``hw4.bki.render.video_poster`` takes it from the video). Every option of
+    ``figure`` (``name``, ``width``, ``align``, ``alt``, ``class``, ``figwidth``) applies;
+    ``:html-width:`` sets the player's width when it should differ from the still's. The HTML
+    player is ``<video controls loop muted playsinline preload="metadata" poster=...
+    aria-label=...>`` (the label: ``:alt:``, else the caption's first sentence), so a page loads
+    only the videos' headers and posters until a reader plays one, with a download link as its
+    fallback; the MP4 and the poster are copied into ``_downloads`` as ``{download}`` would.
 
 Offline MathJax
     ``mathjax_path`` in ``_config.yml`` points into ``_static``; the files come from npm
@@ -28,6 +32,10 @@ Offline MathJax
 Image descriptions
     An image without alt text gets its figure's caption (or a generic description), not its
     file path.
+
+Code in the PDF
+    A cell tagged ``hide-input`` (folded behind "Show code" in the HTML) prints without its
+    code in the PDF; see :func:`hide_inputs_in_print`.
 
 Unnumbered chapters (``hw4_unnumbered`` in ``_config.yml``)
     ``{docname: prefix}``: chapters outside the numbering, so that Task N is chapter N. Their
@@ -68,7 +76,7 @@ class video(nodes.General, nodes.Element):
 class VideoFigure(Figure, SphinxDirective):
     """``figure`` with an MP4 player in the HTML and the still image elsewhere."""
 
-    option_spec = dict(Figure.option_spec, still=directives.unchanged,
+    option_spec = dict(Figure.option_spec, still=directives.unchanged, poster=directives.unchanged,
                        **{"html-width": directives.length_or_percentage_or_unitless})
 
     def run(self) -> list[nodes.Node]:
@@ -78,6 +86,12 @@ class VideoFigure(Figure, SphinxDirective):
             raise self.error(f"video file {video_rel!r} not found (looked for {abspath}).")
         still = self.options.pop("still", None)
         html_width = self.options.pop("html-width", None)
+        alt = self.options.get("alt", "")
+        poster = self.options.pop("poster", None) or posixpath.splitext(video_rel)[0] + "_poster.jpg"
+        poster_rel, poster_abs = self.env.relfn2path(poster)
+        if not Path(poster_abs).is_file():
+            raise self.error(f"video {video_rel!r} needs a poster frame for the HTML player: give "
+                             f":poster: or add {poster} (hw4.bki.render.video_poster).")
         if still is None:
             stem = posixpath.splitext(video_rel)[0]
             for candidate in (f"{stem}_strip.png", f"{stem}.png"):
@@ -94,8 +108,15 @@ class VideoFigure(Figure, SphinxDirective):
             return result  # an error message from figure
         image = next(figs[0].findall(nodes.image))
         self.env.note_dependency(rel)
+        self.env.note_dependency(poster_rel)
+        if not alt:
+            caption = next(figs[0].findall(nodes.caption), None)
+            text = " ".join(caption.astext().split()) if caption is not None else ""
+            alt = re.split(r"(?<=[a-z0-9)])\. ", text, maxsplit=1)[0].rstrip(".")
         player = video(src=self.env.dlfiles.add_file(self.env.docname, rel),
-                       width=html_width or image.get("width"), alt=image.get("alt", ""))
+                       poster=self.env.dlfiles.add_file(self.env.docname, poster_rel),
+                       width=html_width or image.get("width"),
+                       label=f"Video: {alt}" if alt else "Video")
         image.replace_self(player)
         player += image
         return result
@@ -104,10 +125,11 @@ class VideoFigure(Figure, SphinxDirective):
 def visit_video_html(self, node: video) -> None:
     src = posixpath.join(self.builder.dlpath, urllib.parse.quote(node["src"]))
     style = f' style="width: {node["width"]}"' if node.get("width") else ""
-    label = self.attval(node["alt"]) if node.get("alt") else "video"
+    poster = posixpath.join(self.builder.dlpath, urllib.parse.quote(node["poster"]))
+    label = self.attval(node["label"])
     self.body.append(
-        f'<video class="hw4-video" controls loop muted playsinline preload="auto" '
-        f'aria-label="{label}"{style}>'
+        f'<video class="hw4-video" controls loop muted playsinline preload="metadata" '
+        f'poster="{poster}" aria-label="{label}" title="{label}"{style}>'
         f'<source src="{src}" type="video/mp4">'
         f'<a href="{src}">Download the video (MP4)</a></video>\n')
     raise nodes.SkipNode
@@ -220,6 +242,23 @@ def superscripts_as_math(app: Sphinx) -> None:
         tex._tex_escape_map[ord(char)] = f"\\ensuremath{{^{{{plain}}}}}"
 
 
+def hide_inputs_in_print(app: Sphinx, doctree: nodes.document, docname: str) -> None:
+    """The PDF prints the code of a cell only when the notebook shows it open in the HTML: the
+    input of a cell tagged with one of ``hw4_pdf_hidden_input_tags`` (default ``hide-input``,
+    a listing the HTML folds behind a "Show code" button) is left out of the LaTeX, its output
+    kept. So each section's one short instructive listing prints and the plotting and glue code
+    stays in the HTML (and the notebook) only; no code is deleted."""
+    if app.builder.format != "latex":
+        return
+    tags = {f"tag_{t}" for t in app.config.hw4_pdf_hidden_input_tags}
+    for cell in list(doctree.findall(nodes.container)):
+        if "cell" not in cell.get("classes", []) or not tags & set(cell["classes"]):
+            continue
+        for child in list(cell.children):
+            if isinstance(child, nodes.container) and "cell_input" in child.get("classes", []):
+                cell.remove(child)
+
+
 def setup(app: Sphinx) -> dict:
     app.add_node(video, html=(visit_video_html, None),
                  latex=(visit_video_other, depart_video_other),
@@ -235,6 +274,8 @@ def setup(app: Sphinx) -> dict:
     app.connect("builder-inited", check_mathjax)
     app.connect("builder-inited", superscripts_as_math)
     app.connect("doctree-resolved", describe_images)
+    app.add_config_value("hw4_pdf_hidden_input_tags", ["hide-input"], "env", types=[list])
+    app.connect("doctree-resolved", hide_inputs_in_print)
     # after sphinx-external-toc has set root_doc, which the default latex_documents names
     app.connect("config-inited", override_author, priority=900)
     app.connect("config-inited", light_mode)

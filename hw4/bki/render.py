@@ -6,6 +6,9 @@
 * :func:`topdown` makes a top view: for every (x, y) column the highest selected voxel, coloured by
   class or by a scalar (variance).
 * :func:`write_video` writes frames as GIF (imageio) and MP4 (imageio-ffmpeg ships its own ffmpeg).
+* :func:`first_coloured_frame`, :func:`trim_video` and :func:`video_poster` cut a screen recording
+  (RViz's, ``scripts/reference_ros.sh``) so that it starts at the first frame with a map drawn, and
+  take a poster frame for the HTML player.
 """
 from __future__ import annotations
 
@@ -239,6 +242,8 @@ def write_video(frames, gif_path=None, mp4_path=None, fps: float = 2.0, hold: in
     for ``hold / fps`` s, and the cross-fade in ``gif_fade`` frames (default ``min(fade, 1)``: one
     halfway blend), to stay small (each GIF frame is stored whole; the MP4 is the smooth one). The defaults (``hold=1``, ``fade=0``) write one video frame per given frame.
     The MP4 uses the ffmpeg binary shipped by ``imageio-ffmpeg``; frames are padded to even sizes.
+    Beside the MP4 goes its poster frame, the last frame (the whole map), as ``<name>_poster.jpg``
+    (:func:`poster_path`; the book's HTML player shows it before the video plays).
     """
     import imageio.v2 as imageio
     if hold < 1 or fade < 0:
@@ -269,7 +274,84 @@ def write_video(frames, gif_path=None, mp4_path=None, fps: float = 2.0, hold: in
                     for j in range(1, fade + 1):
                         wr.append_data(_blend(f, pad[i + 1], j / (fade + 1)))
         out.append(Path(mp4_path))
+        write_poster(frames[-1], poster_path(mp4_path))
     return out
+
+
+def _ffmpeg(ffmpeg=None) -> str:
+    """The ffmpeg program: ``ffmpeg`` if given, else the binary shipped by ``imageio-ffmpeg``."""
+    if ffmpeg:
+        return str(ffmpeg)
+    import imageio_ffmpeg
+    return imageio_ffmpeg.get_ffmpeg_exe()
+
+
+def poster_path(video) -> Path:
+    """Where a video's poster frame goes: ``<video stem>_poster.jpg`` beside it."""
+    video = Path(video)
+    return video.with_name(video.stem + "_poster.jpg")
+
+
+def write_poster(frame: np.ndarray, path) -> Path:
+    """Save one (H, W, 3) uint8 frame as a JPEG poster (quality 85)."""
+    from PIL import Image
+    Image.fromarray(np.asarray(frame, np.uint8)[..., :3]).save(path, quality=85)
+    return Path(path)
+
+
+def first_coloured_frame(video, crop: str | None = None, min_fraction: float = 0.02,
+                         min_chroma: int = 60, fps: float = 10.0, ffmpeg=None) -> float:
+    """The time [s] of the first frame of ``video`` in which a map is drawn.
+
+    A map's voxels are drawn in saturated class colours on RViz's grey or white background, its
+    grid and panels (and on the black screen, the grey splash before RViz's window opens): a frame
+    shows a map when at least ``min_fraction`` of the pixels of the region ``crop`` (``"w:h:x:y"``
+    [px of the video], e.g. RViz's 3D view; ``None``: the whole frame) have a chroma (largest minus
+    smallest of R, G, B, 0-255) of at least ``min_chroma``. Frames are sampled at ``fps`` [1/s].
+    Raises ``ValueError`` when no frame shows a map."""
+    import subprocess
+    w, h = 160, 120                                   # decoded small: the fraction is what counts
+    vf = f"fps={fps}," + (f"crop={crop}," if crop else "") + f"scale={w}:{h}"
+    raw = subprocess.run([_ffmpeg(ffmpeg), "-loglevel", "error", "-i", str(video), "-vf", vf,
+                          "-f", "rawvideo", "-pix_fmt", "rgb24", "-"],
+                         check=True, capture_output=True).stdout
+    frames = np.frombuffer(raw, np.uint8).reshape(-1, h, w, 3).astype(np.int16)
+    chroma = frames.max(axis=3) - frames.min(axis=3)
+    frac = (chroma >= min_chroma).mean(axis=(1, 2))
+    hit = np.flatnonzero(frac >= min_fraction)
+    if hit.size == 0:
+        raise ValueError(f"no frame of {video} shows a map (largest coloured fraction "
+                         f"{frac.max() if frac.size else 0:.4f} < {min_fraction}).")
+    return float(hit[0] / fps)
+
+
+def trim_video(video, out, start: float, ffmpeg=None, crf: int = 26) -> Path:
+    """Write ``video`` from ``start`` [s] on to ``out`` (H.264, yuv420p, the index at the front so a
+    browser can show the first frame before the rest arrives). ``out`` must differ from
+    ``video``."""
+    import subprocess
+    if Path(out).resolve() == Path(video).resolve():
+        raise ValueError("trim_video writes a new file: out must differ from video")
+    subprocess.run([_ffmpeg(ffmpeg), "-loglevel", "error", "-y", "-ss", f"{max(start, 0.0):.2f}",
+                    "-i", str(video), "-an", "-c:v", "libx264", "-preset", "veryfast", "-crf",
+                    str(crf), "-pix_fmt", "yuv420p", "-movflags", "+faststart", str(out)], check=True)
+    return Path(out)
+
+
+def video_poster(video, out, before_end: float = 0.5, width: int | None = None,
+                 ffmpeg=None) -> Path:
+    """The poster frame of ``video`` (what the HTML player shows before it plays): its frame
+    ``before_end`` [s] before the end, where the map is complete, as an image ``out`` (PNG or JPEG
+    by its suffix), ``width`` [px] wide (``None``: the video's width)."""
+    import subprocess
+    cmd = [_ffmpeg(ffmpeg), "-loglevel", "error", "-y", "-sseof", f"-{before_end:.2f}", "-i",
+           str(video), "-frames:v", "1"]
+    if width:
+        cmd += ["-vf", f"scale={int(width)}:-2"]
+    if str(out).lower().endswith((".jpg", ".jpeg")):
+        cmd += ["-q:v", "4"]
+    subprocess.run(cmd + [str(out)], check=True)
+    return Path(out)
 
 
 def _mask(view: MapView, which: str) -> np.ndarray:
@@ -296,7 +378,7 @@ def draw_trajectory(ax, trajectory: np.ndarray, lift: float = 0.3) -> None:
 def plot_maps(views: dict, cam: Camera, colour: str = "class", which: str = "occupied",
               vmax: float = 0.09, width: float = 5.0, fig=None, trajectory=None,
               legend_cols: int = 1, log_variance: bool = False, legend: str = "right",
-              stack: bool = False, tall: float | None = None):
+              stack: bool = False, tall: float | None = None, below_cols: int = 6):
     """3D voxel renders of several maps side by side, all seen from the same camera.
 
     Parameters
@@ -320,6 +402,9 @@ def plot_maps(views: dict, cam: Camera, colour: str = "class", which: str = "occ
         full-page figure of a large map), instead of side by side.
     tall : float, optional
         Height / width of a panel (default: 0.85 for a perspective camera, else 0.8).
+    below_cols : int
+        Columns of the class legend below the panels (``legend="below"``); fewer for a narrow
+        figure, whose legend would otherwise run wider than the panels.
     """
     import matplotlib.pyplot as plt
     n = len(views)
@@ -329,7 +414,7 @@ def plot_maps(views: dict, cam: Camera, colour: str = "class", which: str = "occ
         if below:
             tall = given or (0.85 if cam.persp else 0.8)
             side = 0.75 if colour == "variance" else 0.0
-            rows = 0 if colour == "variance" else 1 + (len(legend_handles(views, cam, trajectory is not None)) - 1) // 6
+            rows = 0 if colour == "variance" else 1 + (len(legend_handles(views, cam, trajectory is not None)) - 1) // below_cols
             foot = 0.2 * rows + 0.25 * (rows > 0)             # [in] for the legend rows
             w_total, h_total = width * n, (width * n - side) / n * tall + foot
             if stack:
@@ -365,7 +450,8 @@ def plot_maps(views: dict, cam: Camera, colour: str = "class", which: str = "occ
         else:
             variance_colorbar(fig, axes, vmax, log=log_variance)
     elif below:
-        _class_legend(fig, views, loc="lower center", cam=cam, trajectory=trajectory is not None)
+        _class_legend(fig, views, loc="lower center", cam=cam, trajectory=trajectory is not None,
+                      ncol=below_cols)
     else:
         _class_legend(fig, views, loc="center right", cam=cam, ncol=legend_cols,
                       trajectory=trajectory is not None)
@@ -419,7 +505,9 @@ def _class_legend(fig, views, loc: str = "lower center", cam: Camera | None = No
     """A legend of the classes shown (occupied voxels inside ``cam``'s box), 8.5 pt."""
     handles = legend_handles(views, cam, trajectory)
     if ncol is None:
-        ncol = 1 if loc == "center right" else (min(len(handles), 6) or 1)
+        ncol = 1 if loc == "center right" else 6
+    if loc != "center right":
+        ncol = min(len(handles), ncol) or 1
     fig.legend(handles=handles, loc=loc, ncol=ncol, fontsize=8.5, frameon=False,
                handlelength=1.2, handletextpad=0.5, columnspacing=1.0)
 

@@ -116,7 +116,8 @@ def write_gif(frames, path, seconds_per_frame: float = 0.25, hold_last: int = 6)
 
 
 def write_mp4(frames, path, fps: int = 4) -> Path | None:
-    """Write an H.264 MP4 with the ffmpeg that imageio-ffmpeg ships; None when it is unavailable."""
+    """Write an H.264 MP4 with the ffmpeg that imageio-ffmpeg ships, and its poster frame (the last
+    frame) as ``<name>_poster.jpg`` beside it; None when imageio-ffmpeg is unavailable."""
     try:
         import imageio.v2 as iio2
         import imageio_ffmpeg  # noqa: F401
@@ -132,6 +133,8 @@ def write_mp4(frames, path, fps: int = 4) -> Path | None:
     for f in list(frames) + [frames[-1]] * (2 * fps):  # hold the final map two seconds
         w.append_data(f)
     w.close()
+    from ..bki.render import poster_path, write_poster
+    write_poster(frames[-1], poster_path(path))   # the HTML player's poster: the whole map
     return path
 
 
