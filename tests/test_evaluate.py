@@ -508,3 +508,19 @@ def test_paired_bca_difference_and_score_interval_use_the_paired_jackknife():
     assert (d["diff"], d["lo"], d["hi"]) == (0.0, 0.0, 0.0)
     with pytest.raises(InputError):
         ev.bootstrap_scores([binary], s, n_boot=0)
+
+
+def test_paired_comparison_is_the_books_one_convention():
+    """Every chapter's paired difference: common points, PAIRED_BOOT draws, BCa, printed digits."""
+    sem, binary, s = _random_case(8, n=200, n_scans=12)
+    d = ev.paired_comparison(sem, binary, s, "auc", digits=4)
+    b = ev.bootstrap_scores([sem, binary], s, n_boot=ev.PAIRED_BOOT, seed=0, common=True)
+    want = ev.table_difference(b, 0, 1, "auc", digits=4, method="bca")
+    assert {k: d[k] for k in want} == want
+    assert (d["a"], d["b"]) == (round(float(b["auc"][0]), 4), round(float(b["auc"][1]), 4))
+    assert d["diff"] == round(d["a"] - d["b"], 4) and d["n"] == b["n_common"]
+    assert d["n_boot"] == ev.PAIRED_BOOT == 2000 and ev.PAIRED_METHOD == "bca"
+    # the same comparison the other way round: the same interval, mirrored
+    r = ev.paired_comparison(binary, sem, s, "auc", digits=4)
+    assert r["diff"] == -d["diff"]
+    assert r["lo"] == pytest.approx(-d["hi"], abs=1e-9) and r["hi"] == pytest.approx(-d["lo"], abs=1e-9)
