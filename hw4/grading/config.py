@@ -31,7 +31,8 @@ def load(path: Path | None = None) -> dict:
             "atol": float(g.get("atol", 1e-9)),
             "full_credit_share": float(g.get("full_credit_share", 0.99)),
             "zero_credit_share": float(g.get("zero_credit_share", 0.5)),
-            "mean_weight": float(g.get("mean_weight", 0.75)),
+            "mean_weight": float(g.get("mean_weight", 0.5)),
+            "else_credit": float(g.get("else_credit", 1.0)),
             "output_cap": int(g.get("output_cap", 8000)),
             "visibility": str(g.get("visibility", "visible")),
             "hidden_visibility": str(g.get("hidden_visibility", "after_published")),
@@ -47,6 +48,8 @@ def load(path: Path | None = None) -> dict:
             raise InputError(f"visibility must be one of {', '.join(VISIBILITY)}; got {v!r}")
     if not 0 <= out["mean_weight"] <= 1:
         raise InputError("mean_weight must lie between 0 and 1")
+    if not 0 <= out["else_credit"] <= 1:
+        raise InputError("else_credit must lie between 0 and 1")
     if not 0 <= out["zero_credit_share"] < out["full_credit_share"] <= 1:
         raise InputError("need 0 <= zero_credit_share < full_credit_share <= 1")
     if not out["grid_sizes"] or any(not 0.05 <= x <= 5 for x in

@@ -25,6 +25,9 @@ from . import archive, reference, sandbox
 from .config import load as load_config
 
 HERE = Path(__file__).parent
+GRADER_VERSION = 2  # the scoring's version: 2 compares every class probability, mean_weight 0.5,
+# the 2024 template's else reading, diagnoses that must explain the differences
+TIMING_FIELDS = ("execution_time",)  # the only fields of results.json that vary between runs
 MAX_ARRAY_BYTES = 200 * 2**20
 
 
@@ -267,13 +270,25 @@ def _grade(submission, out, stage, cfg, grid_sizes, timeout, memory, visible_onl
         "test_output_format": "md",  # the tests' outputs hold tables and code fences
         "tests": [{k: v for k, v in t.items() if not k.startswith("_")} for t in tests],
         "extra_data": {"grid_sizes": sizes, "hw4_grader": 1, "sandbox_limits": iso,
-                       "grader_error": any(t.get("_grader_error") for t in tests)},
+                       "grader_error": any(t.get("_grader_error") for t in tests),
+                       "grader": GRADER_VERSION, "config": _scoring_config(cfg),
+                       "readings": {str(t["_task"]): t.get("_variant", "")
+                                    for t in tests if t["_grid"] == sizes[0]}},
     }
     from .report import write_report
     write_report(stage, results, tests, notes, sizes, cfg, iso)
     (stage / "results.json").write_text(json.dumps(results, indent=1))
     _publish(stage, out)
     return results
+
+
+def _scoring_config(cfg: dict) -> dict:
+    """The configuration values a score depends on (for ``changes.csv``), flattened."""
+    out = {k: v for k, v in cfg.items() if k not in ("tasks", "output_cap", "visibility",
+                                                     "hidden_visibility")}
+    for t, v in cfg["tasks"].items():
+        out[f"tasks.{t}.points"] = v["points"]
+    return out
 
 
 def _safe_to_hide(paths) -> tuple:
@@ -376,21 +391,27 @@ def _grade_one(task, g, cfg, found, box_maker, slot, hide, timeout, memory, pts,
         test["output"] += f"0 points: {reason}.{logs}"
         test["_reason"] = reason.splitlines()[0][:200]
         return test
-    best = reference.best_match(task, g, mean, var, _prior_candidates(meta), cfg["rtol"], cfg["atol"])
+    best = reference.best_match(task, g, mean, var, _prior_candidates(meta), cfg["rtol"],
+                                cfg["atol"], cfg)
     frac = reference.credit(best, cfg["mean_weight"], cfg["zero_credit_share"],
                             cfg["full_credit_share"])
     test["score"] = round(pts * frac, 4)
-    test["status"] = "passed" if frac == 1.0 else "failed"
-    what = "most likely class" if semantic else "mean"
+    test["status"] = "passed" if test["score"] >= pts else "failed"
+    what = "class probabilities (all K)" if semantic else "mean"
     lines = [f"{best.share:.1%} of the {best.compared:,} compared cells agree with the exact "
-             f"reference ({best.label}, prior {best.prior:.3g}); the {what} agrees in "
+             f"reference ({best.label}, prior {best.prior:.3g}); the {what} agree{'' if semantic else 's'} in "
              f"{best.mean_share:.1%}, the variance in {best.var_share:.1%}: "
              f"{test['score']:g} / {pts:g} points."]
+    if best.factor < 1.0:
+        lines.append(f"This reading earns {best.factor:.0%} of the task's points "
+                     "(else_credit of the grading configuration).")
     if best.share < 1.0:
-        diag = reference.diagnose(task, g, mean, var, best.prior, cfg["rtol"], cfg["atol"],
-                                  best.opts)
+        diag = reference.diagnose(task, g, mean, var, best, cfg["rtol"], cfg["atol"]) \
+            if test["score"] < pts else None
         if diag:
-            lines.append(f"Most likely: {diag[0]} (explains {diag[1]:.0%} of the cells).")
+            lines.append(f"Most likely: {diag[0]} (applied to the reference, this explains "
+                         f"{diag[1]:.0%} of the differing cells; the map then agrees in "
+                         f"{diag[2]:.1%} of the compared cells).")
         lines.append(_first_differences(grid, mean, var, best, semantic))
         if figures:
             test["_figure"] = _figure(out, task, g, grid, mean, best, semantic)
@@ -408,8 +429,9 @@ def _first_differences(grid, mean, var, best, semantic, n=5) -> str:
     for i in bad[:n]:
         x, y = grid.cells[i]
         if semantic:
-            s = f"class {int(np.argmax(mean[i])) + 1}, var {var[i]:.4g}"
-            r = f"class {int(best.ref_value[i]) + 1}, var {best.ref_var[i]:.4g}"
+            c, rc = int(np.argmax(mean[i])), int(best.ref_value[i])
+            s = f"class {c + 1} (p {mean[i, c]:.4g}), var {var[i]:.4g}"
+            r = f"class {rc + 1} (p {best.ref_mean[i, rc]:.4g}), var {best.ref_var[i]:.4g}"
         else:
             s = f"mean {mean[i]:.6g}, var {var[i]:.4g}"
             r = f"mean {best.ref_value[i]:.6g}, var {best.ref_var[i]:.4g}"
