@@ -81,8 +81,8 @@ def test_broken_variants_lose_only_their_task(tmp_path):
     res = grade(_sub(tmp_path, "broken", "broken"), tmp_path / "out", grid_sizes=G)
     _valid(res)
     t = _tests(res)
-    # at most the variance share (25 %) is left, where a swap or a shift keeps the variances
-    assert all(t[n]["score"] <= 0.25 * t[n]["max_score"] + 1e-9 for n in t), res
+    # at most the variance share (50 %) is left, where a swap or a shift keeps the variances
+    assert all(t[n]["score"] <= 0.5 * t[n]["max_score"] + 1e-9 for n in t), res
     assert "alpha and beta are swapped" in t[1]["output"]
     assert "free space is never updated" in t[2]["output"]
     assert "label k is stored as k+1" in t[3]["output"]
@@ -538,3 +538,24 @@ def test_deep_trees_do_not_crash_the_grader(tmp_path, capsys):
     arc = _tar(tmp_path / "d.tgz", [("u/" + "a/" * 40 + "ogm_CSM.py", "file", b"x")])
     with pytest.raises(InputError, match="folders deep"):
         archive.extract(arc, tmp_path / "x")
+
+
+@pytest.mark.skipif(not (STRONG and sandbox.pid_namespace_available()),
+                    reason="a PID namespace needs root")
+def test_task_sees_no_other_process_and_report_names_the_caps(tmp_path):
+    """Each task is process 1 of its own PID namespace: /proc lists only its processes, not
+    the grader's (whose command line is on this test's); the report says which caps ran."""
+    sub = _sub(tmp_path, "pidns")
+    core = (sub / "mapping_core.py").read_text()
+    (sub / "mapping_core.py").write_text(
+        "import os as _os\n"
+        "_seen = sorted(int(p) for p in _os.listdir('/proc') if p.isdigit())\n"
+        "_lines = [open(f'/proc/{p}/cmdline', 'rb').read() for p in _seen]\n"
+        "print('PIDS', _seen, 'PID', _os.getpid(), 'PYTEST', any(b'pytest' in c for c in _lines))\n"
+        + core)
+    res = grade(sub, tmp_path / "out", grid_sizes=G)
+    t = _tests(res)
+    assert "PIDS [1] PID 1 PYTEST False" in t[1]["output"], t[1]["output"]
+    assert t[1]["score"] == 20
+    report = (tmp_path / "out" / "report.md").read_text()
+    assert "memory and process caps: " + sandbox.caps() in report

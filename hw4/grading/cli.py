@@ -1,4 +1,4 @@
-"""The ``grade``, ``check`` and ``autograder`` subcommands of ``python -m hw4``."""
+"""The ``grade``, ``check``, ``similarity`` and ``autograder`` subcommands of ``python -m hw4``."""
 from __future__ import annotations
 
 import argparse
@@ -42,7 +42,32 @@ def register(sub) -> None:
     g.add_argument("--batch", action="store_true", help="SUBMISSION is a folder of submissions")
     g.add_argument("--jobs", type=_positive(int), metavar="N",
                    help="batch: submissions graded at once (default: the number of cores)")
+    g.add_argument("--previous", type=Path, metavar="OLD",
+                   help="batch: an earlier batch's --out folder; writes DIR/changes.csv (the "
+                        "students whose points changed, and why)")
+    g.add_argument("--against", type=Path, action="append", default=[], metavar="KNOWN_DIR",
+                   help="batch: known sources for the similarity columns (repeatable)")
+    g.add_argument("--template", type=Path, metavar="DIR",
+                   help="batch: the course template, discounted in the similarity")
+    g.add_argument("--no-similarity", action="store_true",
+                   help="batch: skip the similarity check")
     g.set_defaults(func=run_grade)
+
+    s = sub.add_parser(
+        "similarity", help="compare submissions with each other and with known sources",
+        description="Compare every pair of submissions (archives or folders in SUBMISSIONS_DIR) "
+                    "and each submission with every file of the known sources (copydetect: "
+                    "winnowing over normalised tokens), the course template's code discounted. "
+                    "Writes DIR/similarity.csv and DIR/similarity.html (matched fragments side "
+                    "by side). A flag is a prompt for a TA to look, never a verdict.")
+    s.add_argument("submissions", type=Path, metavar="SUBMISSIONS_DIR")
+    s.add_argument("--against", type=Path, action="append", default=[], metavar="KNOWN_DIR",
+                   help="a folder of known sources, e.g. public solutions (repeatable)")
+    s.add_argument("--template", type=Path, metavar="DIR",
+                   help="the course template every student starts from (its code is discounted)")
+    s.add_argument("--out", type=Path, default=Path("similarity"), metavar="DIR",
+                   help="output folder (default ./similarity)")
+    s.set_defaults(func=run_similarity)
 
     c = sub.add_parser(
         "check", help="check your own four task files before submitting (visible tests)",
@@ -82,11 +107,25 @@ def run_grade(args) -> int:
         from .batch import grade_batch
         return grade_batch(args.submission, args.out, config=args.config, grid_sizes=args.grid_size,
                            timeout=args.timeout, memory=args.memory,
-                           jobs=args.jobs or os.cpu_count() or 1)
+                           jobs=args.jobs or os.cpu_count() or 1, previous=args.previous,
+                           similarity=not args.no_similarity, against=args.against,
+                           template=args.template)
+    if args.previous or args.against or args.template or args.no_similarity:
+        raise InputError("--previous, --against, --template and --no-similarity go with --batch")
     from .grade import grade
     results = grade(args.submission, args.out, config=args.config, grid_sizes=args.grid_size,
                     timeout=args.timeout, memory=args.memory)
     _print_results(results, args.out)
+    return 0
+
+
+def run_similarity(args) -> int:
+    from .similarity import similarity, summary
+    rows = similarity(args.submissions, args.out, against=args.against, template=args.template)
+    for r in rows:
+        if r["flag"]:
+            print(f"{r['student']}: {r['flag']}")
+    print(f"{summary(rows)}: {args.out / 'similarity.csv'}, {args.out / 'similarity.html'}")
     return 0
 
 

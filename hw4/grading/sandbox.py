@@ -6,10 +6,16 @@ Layers (each used where the machine allows it; :func:`isolation` says which are 
   ``sys.path`` (the submission, the grader's ``utils``, a folder of links to numpy / scipy /
   tqdm only), so that this project's package is not on the path;
 * rlimits: CPU time, address space, processes, file size, open files;
-* as root: a private network namespace (no network: only a down loopback), a private mount
+* as root: a private PID namespace (the task is process 1 of its own: it sees no other
+  process, not the grader's command line; when it ends, every process it started ends with
+  it), a private network namespace (no network: only a down loopback), a private mount
   namespace in which ``/tmp``, ``/var/tmp``, ``/dev/shm``, the grader's package, the output and
   the other submissions are empty read-only tmpfs, and an unprivileged user (one per parallel
   worker) so that file permissions and ``RLIMIT_NPROC`` apply;
+* the memory and the number of processes of all the task's processes together: a cgroup v2
+  of its own (``memory.max``, ``pids.max``) where the machine lets the grader make one with
+  those controllers, else watchers polling four times a second (Pss of the user's processes;
+  RLIMIT_NPROC). :func:`caps` says which ran, and the report repeats it;
 * after each task every process of the submission is killed: its process group, every process
   of its user (as root), and any daemon re-parented to the grader (a child subreaper).
 
@@ -35,6 +41,8 @@ from pathlib import Path
 
 CLONE_NEWNS = 0x00020000
 CLONE_NEWNET = 0x40000000
+CLONE_NEWPID = 0x20000000
+MS_NOEXEC = 8
 MS_RDONLY, MS_NOSUID, MS_NODEV, MS_BIND, MS_REC, MS_PRIVATE = 1, 2, 4, 4096, 16384, 1 << 18
 PR_SET_CHILD_SUBREAPER = 36
 CHILD_PACKAGES = ("numpy", "numpy.libs", "scipy", "scipy.libs", "tqdm")
@@ -173,6 +181,26 @@ def exclusive_user(slot: int = 0):
 
 
 _NS_OK = None
+_PID_OK = None
+
+
+def pid_namespace_available() -> bool:
+    """Whether a private PID namespace can be made here (root, not blocked)."""
+    global _PID_OK
+    if _PID_OK is None:
+        _PID_OK = False
+        if namespaces_available():
+            try:
+                r = subprocess.run([sys.executable, "-I", "-S", "-c",
+                                    "import ctypes,os,sys;l=ctypes.CDLL(None,use_errno=True);"
+                                    f"l.unshare({CLONE_NEWNS | CLONE_NEWNET | CLONE_NEWPID}) and sys.exit(1);"
+                                    "p=os.fork()\nif p==0: os._exit(0 if os.getpid()==1 else 3)\n"
+                                    "sys.exit(os.waitstatus_to_exitcode(os.waitpid(p,0)[1]))"],
+                                   capture_output=True, timeout=20)
+                _PID_OK = r.returncode == 0
+            except (OSError, subprocess.SubprocessError):
+                _PID_OK = False
+    return _PID_OK
 
 
 def namespaces_available() -> bool:
@@ -198,6 +226,100 @@ def set_subreaper() -> bool:
         return _c().prctl(PR_SET_CHILD_SUBREAPER, 1, 0, 0, 0) == 0
     except (AttributeError, OSError):
         return False
+
+
+def _cgroup2_base() -> Path | None:
+    """This process's cgroup v2 folder when it can hold children with the memory and pids
+    controllers (root, cgroup2 mounted, the controllers enabled for its children or
+    enableable), else None."""
+    if not is_root():
+        return None
+    try:
+        mount = None
+        with open("/proc/self/mountinfo") as f:
+            for line in f:
+                left, _, right = line.partition(" - ")
+                if right.split()[:1] == ["cgroup2"]:
+                    mount = left.split()[4]
+                    break
+        if mount is None:
+            return None
+        rel = None
+        with open("/proc/self/cgroup") as f:
+            for line in f:
+                if line.startswith("0::"):
+                    rel = line[3:].strip()
+        if rel is None:
+            return None
+        base = Path(mount) / rel.lstrip("/")
+        if not {"memory", "pids"} <= set((base / "cgroup.controllers").read_text().split()):
+            return None
+        enabled = set((base / "cgroup.subtree_control").read_text().split())
+        if not {"memory", "pids"} <= enabled:
+            (base / "cgroup.subtree_control").write_text("+memory +pids")
+        return base
+    except OSError:
+        return None
+
+
+_CG_BASE = False
+
+
+def caps() -> str:
+    """How the memory and process count of a task's processes together are capped here."""
+    global _CG_BASE
+    if _CG_BASE is False:
+        _CG_BASE = _cgroup2_base()
+    if _CG_BASE is not None:
+        return "cgroup v2 (memory.max, pids.max)"
+    return ("watchers (memory polled four times a second, RLIMIT_NPROC: no writable cgroup v2 "
+            "with the memory and pids controllers here)")
+
+
+def _make_cgroup(limits: "Limits", nproc: int) -> Path | None:
+    """A fresh cgroup v2 for one task with its memory and process caps, or None."""
+    caps()
+    if _CG_BASE is None:
+        return None
+    cg = _CG_BASE / f"hw4grade-{os.getpid()}-{time.monotonic_ns()}"
+    try:
+        cg.mkdir()
+        (cg / "memory.max").write_text(str(int(limits.memory_mb) * 2**20))
+        if (cg / "memory.swap.max").exists():
+            (cg / "memory.swap.max").write_text("0")
+        (cg / "pids.max").write_text(str(int(nproc)))
+        return cg
+    except OSError:
+        _remove_cgroup(cg)
+        return None
+
+
+def _cgroup_events(cg: Path) -> str | None:
+    """Why the cgroup's caps stopped the task (an OOM kill, a refused fork), or None."""
+    try:
+        mem = dict(ln.split() for ln in (cg / "memory.events").read_text().splitlines())
+        if int(mem.get("oom_kill", 0)) or int(mem.get("max", 0)):
+            return "used more than its memory (all its processes together, cgroup memory.max)"
+        pids = dict(ln.split() for ln in (cg / "pids.events").read_text().splitlines())
+        if int(pids.get("max", 0)):
+            return None  # a refused fork is reported by the task itself ('forked ...')
+    except (OSError, ValueError):
+        pass
+    return None
+
+
+def _remove_cgroup(cg: Path) -> None:
+    try:
+        if (cg / "cgroup.kill").exists():
+            (cg / "cgroup.kill").write_text("1")
+        for _ in range(50):
+            try:
+                cg.rmdir()
+                return
+            except OSError:
+                time.sleep(0.02)
+    except OSError:
+        pass
 
 
 def _children_of(pid: int) -> list[int]:
@@ -278,8 +400,11 @@ def run(argv: list, scratch: Path, limits: Limits, *, user: tuple | None = None,
     scratch = Path(scratch).resolve()
     notes = []
     use_ns = isolate_network and namespaces_available()
+    use_pid = use_ns and pid_namespace_available()
     if not use_ns:
         notes.append("network and mount namespaces unavailable: the network is not cut")
+    elif not use_pid:
+        notes.append("PID namespace unavailable: the task can see the machine's processes")
     if user is None:
         notes.append("not run as root: no separate user, file permissions are the grader's")
     hide = [os.path.realpath(h) for h in hide if h and os.path.isdir(h)]
@@ -306,12 +431,25 @@ def run(argv: list, scratch: Path, limits: Limits, *, user: tuple | None = None,
         top_hide = _tops_to_hide(argv[0])
     cpu = int(limits.timeout) + 5
     mem = int(limits.memory_mb) * 2**20
+    cg = _make_cgroup(limits, nproc) if user else None
+    notes.append("memory and process caps: " + ("cgroup v2 (memory.max, pids.max)" if cg else
+                 caps() if user else "watchers (not root: per-process limits only)"))
+    cg_procs = str(cg / "cgroup.procs").encode() if cg else None
 
     def preexec():  # pragma: no cover - runs in the forked child before exec
+        if cg_procs:  # the task and all it forks count against the cgroup's caps
+            fd = os.open(cg_procs, os.O_WRONLY)
+            os.write(fd, str(os.getpid()).encode())
+            os.close(fd)
         if use_ns:
             libc = _c()
-            _check(libc.unshare(CLONE_NEWNS | CLONE_NEWNET), "unshare")
+            _check(libc.unshare(CLONE_NEWNS | CLONE_NEWNET | (CLONE_NEWPID if use_pid else 0)),
+                   "unshare")
             _check(libc.mount(b"none", b"/", None, MS_REC | MS_PRIVATE, None), "mount private")
+            if use_pid:
+                _become_pid1()
+                _check(libc.mount(b"proc", b"/proc", b"proc", MS_NOSUID | MS_NODEV | MS_NOEXEC,
+                                  None), "mount /proc")
             _check(libc.mount(str(scratch).encode(), ANCHOR.encode(), None, MS_BIND | MS_REC,
                               None), "bind scratch")
             if site_links:  # the packages, reached through links that the hiding below cuts
@@ -367,7 +505,7 @@ def run(argv: list, scratch: Path, limits: Limits, *, user: tuple | None = None,
                 if left <= 0.25:
                     timed_out = True
                     break
-                disk = _disk_over(scratch, limits) or (user and _memory_over(user[0], limits))
+                disk = _disk_over(scratch, limits) or (user and not cg and _memory_over(user[0], limits))
                 if disk:
                     break
     seconds = time.monotonic() - t0
@@ -381,11 +519,37 @@ def run(argv: list, scratch: Path, limits: Limits, *, user: tuple | None = None,
     killed = _reap_orphans(known | {proc.pid})
     if user:
         _kill_user(*user)
+    if cg:
+        disk = disk or _cgroup_events(cg)
+        _remove_cgroup(cg)
     res = Result(None if timed_out else proc.returncode, timed_out, seconds,
                  _read_capped(out_path, limits.output_cap), _read_capped(err_path, limits.output_cap),
                  killed, notes, disk)
     shutil.rmtree(logs, ignore_errors=True)
     return res
+
+
+def _become_pid1() -> None:  # pragma: no cover - runs in the forked child before exec
+    """After unshare(CLONE_NEWPID): fork; the child goes on (process 1 of the new namespace) to
+    exec the task, this process stays behind, closes every descriptor (so that the exec's
+    status pipe closes when the child execs), waits and ends as the child ended."""
+    pid = os.fork()
+    if pid == 0:
+        return
+    os.closerange(3, 65536)
+    while True:
+        try:
+            _, status = os.waitpid(pid, 0)
+            break
+        except InterruptedError:
+            continue
+        except ChildProcessError:
+            os._exit(1)
+    if os.WIFSIGNALED(status):
+        sig = os.WTERMSIG(status)
+        signal.signal(sig, signal.SIG_DFL)
+        os.kill(os.getpid(), sig)
+    os._exit(os.WEXITSTATUS(status) if os.WIFEXITED(status) else 1)
 
 
 def _memory_over(uid: int, limits: Limits) -> str | None:

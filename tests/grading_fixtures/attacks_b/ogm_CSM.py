@@ -7,11 +7,21 @@ import signal
 import mapping_core
 
 if {KILL_PARENT}:
+    parent = os.getppid()  # 0 in a PID namespace of its own: the grader is not visible
     try:
-        os.kill(os.getppid(), signal.SIGKILL)
+        if parent == 0:
+            raise ProcessLookupError("the parent is outside this PID namespace")
+        os.kill(parent, signal.SIGKILL)
         print("KILLED THE PARENT")
     except OSError as e:
         print("kill blocked:", e)
+    for pid in os.listdir("/proc"):  # the grader by its command line
+        try:
+            if pid.isdigit() and b"pytest" in open(f"/proc/{pid}/cmdline", "rb").read():
+                os.kill(int(pid), signal.SIGKILL)
+                print("KILLED A GRADER PROCESS")
+        except OSError:
+            pass
     try:  # every process this user may signal (none of the grader's)
         os.kill(-1, signal.SIGKILL)
     except OSError:
