@@ -7,7 +7,9 @@ grader computes itself for all four tasks (the exact core's reference maps for e
 variant, the end-point readings included) and (b) the full grading of each submission (default:
 the loop submission ``tests/grading_fixtures/exact``, numpy over each pose's beams, and its twin
 ``template_speed`` that loops like the course template), and prints the ratio, the score and
-whether the total fits Gradescope's 10 minutes.
+whether the total fits Gradescope's 10 minutes. Then (c) the similarity check
+(``python -m hw4 similarity``) over the test set of ``tests/grading_fixtures`` (exact,
+disguised, independent) copied ``--copies`` times, as a class of that many submissions.
 """
 from __future__ import annotations
 
@@ -43,6 +45,7 @@ def main() -> None:
     p.add_argument("submissions", nargs="*", type=Path,
                    default=[fixtures / "exact", fixtures / "template_speed"])
     p.add_argument("--grid-size", type=float, action="append")
+    p.add_argument("--copies", type=int, default=20, help="similarity: copies of the 3 fixtures")
     a = p.parse_args()
     sizes = a.grid_size or load()["grid_sizes"]
     for g in sizes:
@@ -60,6 +63,25 @@ def main() -> None:
             print(f"  {sub.name}: graded in {total:.1f} s ({total / core:.0f}x the core; "
                   f"{'within' if total < GRADESCOPE_LIMIT else 'OVER'} Gradescope's "
                   f"{GRADESCOPE_LIMIT:.0f} s); score {res['score']:g}: {tasks}")
+    similarity_seconds(fixtures, a.copies)
+
+
+def similarity_seconds(fixtures: Path, copies: int) -> None:
+    import shutil
+    from hw4.grading.similarity import similarity
+    srcs = [fixtures / "exact", fixtures / "similarity" / "disguised",
+            fixtures / "similarity" / "independent"]
+    with tempfile.TemporaryDirectory() as tmp:
+        subs = Path(tmp) / "subs"
+        for k in range(copies):
+            for s in srcs:
+                shutil.copytree(s, subs / f"{s.name}_{k}",
+                                ignore=shutil.ignore_patterns("__pycache__"))
+        t = time.perf_counter()
+        similarity(subs, Path(tmp) / "out", template=fixtures / "similarity" / "template")
+        n = 3 * copies
+        print(f"similarity of {n} submissions ({n * (n - 1) // 2} pairs): "
+              f"{time.perf_counter() - t:.1f} s")
 
 
 if __name__ == "__main__":

@@ -5,7 +5,8 @@ literals normalised, so renaming, comments and layout do not hide a copy; a side
 report of the matched fragments). Each submission's Python files (its four task files and any
 helper module, by name) make one document; every pair of submissions is compared, and each
 submission with every file of the known sources (``--against``: a folder the staff fill with
-public solutions they found). The course template's own code (``--template``) is boilerplate:
+public solutions they found: each subfolder is one known solution, each loose .py file one
+source). The course template's own code (``--template``) is boilerplate:
 its fingerprints are removed from every document first, so the skeleton all students start
 from never counts as shared.
 
@@ -13,7 +14,7 @@ A pair's score is the larger of its two shares (copydetect's: the share of one d
 fingerprints found in the other), so a copied public file flags inside a submission that holds
 more. A submission is flagged when its highest score against another submission, or against a
 known source, reaches ``threshold`` AND at least ``min_tokens`` tokens match (a short document
-cannot flag by a few common lines). The threshold (0.5) and ``min_tokens`` (150) were measured
+cannot flag by a few common lines). The threshold (0.5) and ``min_tokens`` (300) were measured
 (README, "Grading"): independent solutions stay below, disguised copies above.
 
 The submissions' code is only read (tokenised), never run or imported. The student's file
@@ -33,7 +34,7 @@ from . import archive
 from .batch import list_submissions, student_names
 
 THRESHOLD = 0.5     # pair score at or above which a submission is flagged (measured)
-MIN_TOKENS = 150    # and at least this many matched tokens
+MIN_TOKENS = 300    # and at least this many matched tokens
 NOISE_T, GUARANTEE_T = 25, 30  # copydetect's k-gram length and guarantee (its defaults)
 MAX_FILE_BYTES = 1_000_000
 COLUMNS = ["student", "submission", "most_similar_submission", "submission_score",
@@ -127,11 +128,21 @@ def similarity(submissions: Path, out: Path, *, against=(), template: Path | Non
                 docs[s] = p
         known = {}
         for k, a in enumerate(against):
-            for f in _python_files(a):
-                rel = f.relative_to(a)
-                label = f"{a.name}/{rel}" if len(against) == 1 else f"{k + 1}:{a.name}/{rel}"
-                dest = known_dir / f"k{len(known):04d}_{'_'.join(rel.parts)}"
-                shutil.copyfile(f, dest)
+            for entry in sorted(a.iterdir()):
+                if entry.name.startswith(".") or entry.is_symlink():
+                    continue
+                if entry.is_dir():  # one known solution (a repository's files) = one document
+                    text = _document(entry, work, notes)
+                elif entry.suffix == ".py" and entry.stat().st_size <= MAX_FILE_BYTES:
+                    text = entry.read_text(encoding="utf-8", errors="replace")
+                else:
+                    continue
+                if not text.strip():
+                    continue
+                label = f"{a.name}/{entry.name}" if len(against) == 1 else \
+                    f"{k + 1}:{a.name}/{entry.name}"
+                dest = known_dir / f"k{len(known):04d}_{entry.stem}.py"
+                dest.write_text(text)
                 known[dest] = label
         if template:
             for i, f in enumerate(_python_files(Path(template))):
