@@ -1,21 +1,32 @@
 """Speed and memory of the four counting sensor models on the full Intel map.
 
-Prints, per model and grid size: the vectorised build time (best of --repeat runs), the time the
-literal loop transcription in ``tests/literal.py`` would take for the whole map (timed on a
-random sample of cells, scaled by the cell count), their ratio, and the peak resident memory
-of a fresh process building the map. Everything is measured side by side in one run, so the
-ratios hold on a noisy machine even when the absolute times drift.
+Prints, per model and grid size, side by side in one run (so the ratios hold on a noisy machine
+even when the absolute times drift):
 
-    python benchmarks/bench_models.py [--repeat 3] [--sample 150] [--sizes 0.135 0.27 0.5]
+* the compiled engine (the default) on one thread and on two, and the numpy reference engine,
+  each ``construct_map + build_ogm`` with the data loaded (best of --repeat runs);
+* the work it evaluated: the (cell, pose) pairs inside the perceptual field and, for the
+  continuous models, the free samples tested; pairs per second (pairs + samples over the time);
+* the share of the floor it reaches: the floor model is ``FLOOR_NS`` per pair and per free
+  sample (the top of the 5-10 ns range of issue 23), and the share is floor time / time;
+* the literal loop transcription of ``tests/literal.py`` (timed on a random sample of cells,
+  scaled by the cell count) and the speed-up over it; the peak resident memory of a fresh
+  process building the map.
 
-Targets (issue 3, grid 0.135 m): discrete CSM <= 0.25 s, continuous CSM <= 1.0 s, semantic
-versions <= 1.5x those; peak memory <= 1 GB; hundreds of times faster than the loops.
+Then the two heavy options at 0.135 m (``nearest_poses=None``; ``beams='all'``), same columns.
+
+    python benchmarks/bench_models.py [--repeat 5] [--sample 150] [--sizes 0.135 0.27 0.5]
+                                      [--no-loops] [--json rows.json]
+
+Targets (issue 23, grid 0.135 m, one thread): CSM <= 55 ms, S-CSM <= 65 ms, continuous CSM <=
+90 ms, continuous S-CSM <= 110 ms; nearest_poses=None <= 0.6 s; beams='all' <= 1.2 s.
 """
 from __future__ import annotations
 
 import argparse
 import importlib.util
 import json
+import os
 import subprocess
 import sys
 import time
@@ -25,11 +36,34 @@ import numpy as np
 from scipy.io import loadmat
 
 from hw4.core.data import INTEL, INTEL_SEMANTIC, ensure
-from hw4.tasks import build_map, load_task_data, task_name
+from hw4.tasks import load_task_data, model_class, task_name
 
 ROOT = Path(__file__).resolve().parent.parent
 LITERAL_NAMES = {1: "CSM", 2: "continuous_CSM", 3: "S_CSM", 4: "continuous_S_CSM"}
-TARGET = {1: 0.25, 2: 1.0, 3: 0.375, 4: 1.5}  # seconds at 0.135 m
+TARGET = {1: 0.055, 2: 0.090, 3: 0.065, 4: 0.110}  # seconds at 0.135 m, one thread (issue 23)
+HEAVY = ((1, dict(nearest_poses=None), 0.6), (2, dict(nearest_poses=None), 0.6),
+         (2, dict(beams="all"), 1.2), (4, dict(beams="all"), 1.2))
+FLOOR_NS = 10.0  # floor model: ns per (cell, pose) pair and per free sample
+
+
+def timed(task, g, data, repeat, engine="auto", threads=1, **kw):
+    """Best wall time [s] of construct_map + build_ogm, the work counted, and the map."""
+    from hw4.core import evidence
+    cls = model_class(task)
+    scans = data.scans if cls.semantic else [s[:2] for s in data.scans]
+    best, ogm = np.inf, None
+    os.environ.update(HW4_THREADS=str(threads), HW4_ENGINE=engine)
+    try:
+        for _ in range(repeat):
+            ogm = cls(grid_size=g, **kw)
+            t0 = time.perf_counter()
+            ogm.construct_map(data.poses, scans)
+            ogm.build_ogm()
+            best = min(best, time.perf_counter() - t0)
+    finally:
+        os.environ.pop("HW4_THREADS", None)
+        os.environ.pop("HW4_ENGINE", None)
+    return best, dict(evidence.last_stats), ogm
 
 
 def load_literal():
@@ -47,11 +81,25 @@ def peak_memory_mb(task: int, grid_size: float) -> float:
     return float(out.stdout.strip().splitlines()[-1])
 
 
+def _row(name, g, n, t1, t2, tn, stats, target):
+    work = stats.get("pairs", 0) + stats.get("samples", 0)
+    floor = work * FLOOR_NS * 1e-9
+    ok = "" if target is None else ("ok" if t1 <= target else "MISSED")
+    print(f"{name:<26}{g:>6.3f}{n:>8,}{t1 * 1e3:>9.1f}{t2 * 1e3:>9.1f}{tn * 1e3:>9.1f}"
+          f"{tn / t1:>7.1f}x{stats.get('pairs', 0) / 1e6:>8.2f}M{stats.get('samples', 0) / 1e6:>8.2f}M"
+          f"{work / t1 / 1e6:>9.1f}M{floor / t1:>8.0%}{'' if target is None else f'{target * 1e3:>8.0f}'}"
+          f"{ok:>7}", end="")
+    return dict(model=name, grid=g, cells=n, seconds=t1, seconds_2_threads=t2, numpy_seconds=tn,
+                pairs=stats.get("pairs", 0), samples=stats.get("samples", 0),
+                pairs_per_second=work / t1, floor_share=floor / t1, target=target)
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--repeat", type=int, default=3)
+    ap.add_argument("--repeat", type=int, default=5)
     ap.add_argument("--sample", type=int, default=150, help="cells timed with the literal loops")
     ap.add_argument("--sizes", type=float, nargs="+", default=[0.135, 0.27, 0.5])
+    ap.add_argument("--no-loops", action="store_true", help="skip the literal loops and memory")
     ap.add_argument("--json", type=Path, help="also write the rows to this JSON file")
     args = ap.parse_args(argv)
 
@@ -59,33 +107,45 @@ def main(argv=None):
     raw = {False: loadmat(ensure(INTEL)), True: loadmat(ensure(INTEL_SEMANTIC))}
     rng = np.random.default_rng(0)
     rows = []
-    print(f"{'model':<18}{'grid':>7}{'cells':>9}{'vectorised':>12}{'loops (est.)':>14}"
-          f"{'speed-up':>10}{'peak MB':>9}{'target':>9}")
+    print(f"times in ms, best of {args.repeat}; pairs = (cell, pose) pairs in the field (beams='all':"
+          f" (point, cell) pairs within l); floor = {FLOOR_NS:g} ns per pair and free sample")
+    print(f"{'model':<26}{'grid':>6}{'cells':>8}{'1 thr':>9}{'2 thr':>9}{'numpy':>9}{'gain':>8}"
+          f"{'pairs':>9}{'samples':>9}{'pairs/s':>10}{'floor':>8}{'target':>8}{'':>7}"
+          + ("" if args.no_loops else f"{'loops':>10}{'speed-up':>10}{'peak MB':>9}"))
     for task in (1, 2, 3, 4):
         data = load_task_data(task)
+        timed(task, 0.5, data, 1)  # load the compiled kernels before timing
         for g in args.sizes:
-            times = []
-            for _ in range(args.repeat):
-                ogm = build_map(task, g, data=data)
-                times.append(ogm.build_seconds)
-            best = min(times)
+            t1, stats, ogm = timed(task, g, data, args.repeat, "compiled", 1)
+            t2, _, _ = timed(task, g, data, args.repeat, "compiled", 2)
+            tn, _, _ = timed(task, g, data, max(1, args.repeat // 2), "numpy", 1)
             n = ogm.map["size"]
-            ids = rng.choice(n, size=min(args.sample, n), replace=False)
-            r = raw[ogm.semantic]
-            poses = literal.poses_from_struct(r["robotPose"])
-            scans = literal.scans_from_cell(r["laserScan"])
-            t0 = time.perf_counter()
-            literal.literal_counts(LITERAL_NAMES[task], None, None, ids, grid_size=g,
-                                   poses=poses, scans=scans)
-            loops = (time.perf_counter() - t0) / len(ids) * n
-            mem = peak_memory_mb(task, g)
-            target = TARGET[task] if g == 0.135 else None
-            ok = "" if target is None else ("ok" if best <= target else "MISSED")
-            rows.append(dict(model=task_name(task), grid=g, cells=n, seconds=best,
-                             loops_seconds=loops, speedup=loops / best, peak_mb=mem,
-                             target=target))
-            print(f"{task_name(task):<18}{g:>7.3f}{n:>9,}{best:>11.3f}s{loops:>13.1f}s"
-                  f"{loops / best:>9.0f}x{mem:>9.0f}{ok:>9}")
+            row = _row(task_name(task), g, n, t1, t2, tn, stats,
+                       TARGET[task] if g == 0.135 else None)
+            if not args.no_loops:
+                ids = rng.choice(n, size=min(args.sample, n), replace=False)
+                r = raw[ogm.semantic]
+                poses = literal.poses_from_struct(r["robotPose"])
+                scans = literal.scans_from_cell(r["laserScan"])
+                t0 = time.perf_counter()
+                literal.literal_counts(LITERAL_NAMES[task], None, None, ids, grid_size=g,
+                                       poses=poses, scans=scans)
+                loops = (time.perf_counter() - t0) / len(ids) * n
+                mem = peak_memory_mb(task, g)
+                row.update(loops_seconds=loops, speedup=loops / t1, peak_mb=mem)
+                print(f"{loops:>9.1f}s{loops / t1:>9.0f}x{mem:>9.0f}", end="")
+            print()
+            rows.append(row)
+    print("heavy options at 0.135 m (one thread; 'all' beams run on one thread only)")
+    for task, kw, target in HEAVY:
+        data = load_task_data(task)
+        name = task_name(task) + " " + ", ".join(f"{k}={v}" for k, v in kw.items())
+        rep = max(1, args.repeat // 2)
+        t1, stats, ogm = timed(task, 0.135, data, rep, "compiled", 1, **kw)
+        t2 = timed(task, 0.135, data, rep, "compiled", 2, **kw)[0] if "beams" not in kw else t1
+        tn, _, _ = timed(task, 0.135, data, 1, "numpy", 1, **kw)
+        rows.append(_row(name[:26], 0.135, ogm.map["size"], t1, t2, tn, stats, target))
+        print()
     if args.json:
         args.json.write_text(json.dumps(rows, indent=1))
 

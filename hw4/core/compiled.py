@@ -1,0 +1,868 @@
+"""The counting core compiled: the loops of :mod:`hw4.core.evidence` as numba kernels.
+
+:func:`hw4.core.evidence.count_evidence` keeps its readable numpy formulation (``engine='numpy'``)
+as the reference; this module is the default engine (``engine='compiled'``). Every kernel repeats
+the numpy formulation's floating-point steps in the same order, per pair, so that each cell gets
+the same pairs, the same nearest beam and the same sums:
+
+* :func:`nearest_poses` is the exact k-nearest-pose query (squared distances ``dx dx + dy dy``
+  as scipy's KD-tree computes them, sorted by distance) on a bucket grid of the poses; cells whose
+  ranking has a tie (two poses at the same distance) are flagged and answered by scipy's KD-tree
+  itself, so the poses and their order are always the KD-tree's.
+* :func:`cell_evidence` visits, cell by cell, its poses in the KD-tree's order: range, wrapped
+  bearing (``np.remainder`` as numpy computes it), the perceptual field, the nearest beam from
+  the same sorted bearing index (:class:`hw4.core.sensor.BeamTable`), then Algorithm 1 or 2.
+  Sums per cell are formed in the numpy path's order (end points per class over the cell's
+  poses, then the free samples offset by offset), so the map does not depend on how cells are
+  split among threads.
+* :func:`all_beams_evidence` is ``beams='all'``: pose by pose, every end point and free sample
+  against the cells within ``l``, each pose's sums added to the map in pose order as
+  ``np.bincount`` does.
+
+Differences to numpy can only come from the transcendental functions (numpy may use its own SIMD
+``sin``, ``cos`` and ``arctan2``, numba calls the C library's): those agree to an ulp or so, and
+the tests compare the two engines to 1e-12 relative (bit for bit where the machine's functions
+agree). Compiled once per install (numba's cache, beside the package); :func:`warm` says so.
+"""
+from __future__ import annotations
+
+import math
+import os
+import sys
+from concurrent.futures import ThreadPoolExecutor
+
+import numpy as np
+from numba import njit
+
+TWO_PI = 2.0 * np.pi
+KNN_BUCKETS = 0.5  # buckets per pose of the nearest-pose grid (per axis: sqrt(n * this))
+PI = np.pi
+
+
+@njit(cache=True, nogil=True)
+def _wrap(a):  # pragma: no cover - compiled
+    """``wrap_to_pi``: numpy's ``remainder(a, 2 pi)``, then the shift above pi."""
+    if 0.0 < a < TWO_PI:  # fmod(a, 2 pi) = a exactly: skip the slow fmod
+        w = a
+    elif -TWO_PI < a < 0.0:  # fmod = a, then the divisor's sign: a + 2 pi
+        w = a + TWO_PI
+    else:  # Python's float modulo: fmod, then the divisor's sign, as numpy's remainder
+        w = a % TWO_PI
+    if w > PI:
+        w -= TWO_PI
+    return w
+
+
+@njit(cache=True, nogil=True)
+def _kernel(d, a, b, c3, inv2pi, sigma0):  # pragma: no cover - compiled
+    """``sparse_kernel_inside`` of one distance d < l: a = 2 pi / l, b = -1 / (3 l), c3 = 1/3."""
+    t = d * a
+    c = math.cos(t)
+    c += 2.0
+    e = d * b
+    e += c3
+    c *= e
+    s = math.sin(t)
+    s *= inv2pi
+    c += s
+    c *= sigma0
+    if c < 0.0:
+        c = 0.0
+    return c
+
+
+@njit(cache=True, nogil=True)
+def _nearest(pose, phi, bearings, srt, key, seg_start, seg_len, bin_lo, dense, sbearing, bin_scale,
+             bins):  # pragma: no cover - compiled
+    """``BeamTable._nearest`` for one (pose, bearing): the beam index and |wrapped difference|."""
+    start = seg_start[pose]
+    n = seg_len[pose]
+    if dense[pose]:
+        v = pose * 8.0 + phi
+        lo = 0
+        hi = n
+        while lo < hi:
+            mid = (lo + hi) // 2
+            if key[start + mid] < v:
+                lo = mid + 1
+            else:
+                hi = mid
+        pos = lo
+        o0 = -2
+        o1 = 2
+    else:
+        b = math.floor((phi + PI) * bin_scale)
+        ib = int(b) if b > 0 else 0
+        if ib > bins - 1:
+            ib = bins - 1
+        pos = bin_lo[pose, ib]
+        nxt = pos if pos < n - 1 else n - 1
+        if pos < n and sbearing[start + nxt] < phi:
+            pos += 1
+        o0 = -1
+        o1 = 1
+    best = -1
+    best_d = 0.0
+    for off in range(o0, o1):
+        i = pos + off  # in [-2, n + 1]: Python's (pos + off) % n without a division
+        while i < 0:
+            i += n
+        while i >= n:
+            i -= n
+        cand = srt[start + i]
+        d = abs(_wrap(bearings[cand] - phi))
+        if best < 0 or d < best_d or (d == best_d and cand < best):
+            best = cand
+            best_d = d
+    return best, best_d
+
+
+EPS = 1e-8  # [rad] bound used for the fast arctangent's error (its true error is below 1e-10)
+TAN_PI_8 = 0.41421356237309503
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _atan2_fast(y, x):  # pragma: no cover - compiled
+    """arctan2(y, x) [rad] within 1e-10 (octant reduction, then atan(u) for |u| <= tan(pi/8) by
+    its Taylor series to u^21: remainder below 0.4143^23 / 23 < 7e-11)."""
+    ax = abs(x)
+    ay = abs(y)
+    swap = ay > ax
+    if swap:
+        a = ax / ay
+    elif ax > 0.0:
+        a = ay / ax
+    else:
+        a = 0.0
+    base = 0.0
+    if a > TAN_PI_8:
+        a = (a - 1.0) / (a + 1.0)
+        base = PI / 4
+    u2 = a * a
+    p = 1.0 / 21.0
+    p = p * u2 - 1.0 / 19.0
+    p = p * u2 + 1.0 / 17.0
+    p = p * u2 - 1.0 / 15.0
+    p = p * u2 + 1.0 / 13.0
+    p = p * u2 - 1.0 / 11.0
+    p = p * u2 + 1.0 / 9.0
+    p = p * u2 - 1.0 / 7.0
+    p = p * u2 + 1.0 / 5.0
+    p = p * u2 - 1.0 / 3.0
+    v = base + (a + a * u2 * p)
+    if swap:
+        v = PI / 2 - v
+    if x < 0.0 or (x == 0.0 and math.copysign(1.0, x) < 0.0):
+        v = PI - v
+    if y < 0.0 or (y == 0.0 and math.copysign(1.0, y) < 0.0):
+        v = -v
+    return v
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _nearest_fast(pose, phi, bearings, srt, seg_start, seg_len, bin_lo, sbearing, bin_scale,
+                  bins):  # pragma: no cover - compiled
+    """``_nearest`` (bin-table poses) for a bearing ``phi`` known within EPS: the beam, its
+    |difference| and whether both are certain (no bearing within EPS of phi, and the two
+    neighbours' differences apart by more than 2 EPS)."""
+    start = seg_start[pose]
+    n = seg_len[pose]
+    b = math.floor((phi + PI) * bin_scale)
+    ib = int(b) if b > 0 else 0
+    if ib > bins - 1:
+        ib = bins - 1
+    pos = bin_lo[pose, ib]
+    nxt = pos if pos < n - 1 else n - 1
+    if pos < n and sbearing[start + nxt] < phi:
+        pos += 1
+    sure = True
+    if pos > 0 and sbearing[start + pos - 1] > phi - EPS:
+        sure = False
+    if pos < n and sbearing[start + pos] < phi + EPS:
+        sure = False
+    i0 = pos - 1
+    if i0 < 0:
+        i0 += n
+    i1 = pos
+    if i1 >= n:
+        i1 -= n
+    c0 = srt[start + i0]
+    c1 = srt[start + i1]
+    d0 = abs(_wrap(bearings[c0] - phi))
+    d1 = abs(_wrap(bearings[c1] - phi))
+    if c0 != c1 and abs(d0 - d1) <= 2.0 * EPS + 1e-12:
+        sure = False
+    if d1 < d0 or (d1 == d0 and c1 < c0):
+        return c1, d1, sure
+    return c0, d0, sure
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _insert(d, t, bd, bi, have, m):  # pragma: no cover - compiled
+    """Insert pose t at squared distance d into the sorted (bd, bi) of length m; new ``have``."""
+    if have < m or d < bd[m - 1] or (d == bd[m - 1] and t < bi[m - 1]):
+        j = have if have < m else m - 1
+        while j > 0 and (bd[j - 1] > d or (bd[j - 1] == d and bi[j - 1] > t)):
+            bd[j] = bd[j - 1]
+            bi[j] = bi[j - 1]
+            j -= 1
+        bd[j] = d
+        bi[j] = t
+        if have < m:
+            have += 1
+    return have
+
+
+@njit(cache=True, nogil=True)
+def _knn_block(cells, pxy, k, c0, c1, bx0, by0, bsize, nbx, nby, bstart, bidx, out, tie):  # pragma: no cover - compiled
+    """The ``k`` nearest poses of cells ``c0:c1`` (sorted by squared distance, then index); ``tie``
+    marks cells whose first k + 1 distances hold two equal values.
+
+    A cell next to the previous one searches the box of radius (previous (k+1)-th distance + the
+    step between them), which holds all its k + 1 nearest; otherwise rings of buckets grow until
+    the (k+1)-th distance lies inside the searched ring.
+    """
+    n = pxy.shape[0]
+    m = k + 1 if n > k else k
+    bd = np.empty(m)
+    bi = np.empty(m, np.int64)
+    prev = False
+    px_ = 0.0
+    py_ = 0.0
+    for ci in range(c0, c1):
+        cx = cells[ci, 0]
+        cy = cells[ci, 1]
+        have = 0
+        if prev:
+            step = math.sqrt((cx - px_) ** 2 + (cy - py_) ** 2)
+            rad = (math.sqrt(bd[m - 1]) + step) * (1.0 + 1e-9) + 1e-9
+            rad2 = rad * rad
+            gx0 = max(0, int(math.floor((cx - rad - bx0) / bsize)) - 1)
+            gx1 = min(nbx - 1, int(math.floor((cx + rad - bx0) / bsize)) + 1)
+            gy0 = max(0, int(math.floor((cy - rad - by0) / bsize)) - 1)
+            gy1 = min(nby - 1, int(math.floor((cy + rad - by0) / bsize)) + 1)
+            for gy in range(gy0, gy1 + 1):
+                for b in range(gy * nbx + gx0, gy * nbx + gx1 + 1):
+                    for q in range(bstart[b], bstart[b + 1]):
+                        t = bidx[q]
+                        dx = cx - pxy[t, 0]
+                        dy = cy - pxy[t, 1]
+                        d = dx * dx + dy * dy
+                        if d <= rad2:
+                            have = _insert(d, t, bd, bi, have, m)
+        if have < m:  # first cell (or, never seen, a short box): grow rings of buckets
+            have = 0
+            seen = 0
+            qx = int(math.floor((cx - bx0) / bsize))
+            qy = int(math.floor((cy - by0) / bsize))
+            # rings nearer than the bucket grid are empty: start at the first that reaches it
+            R = max(0, qx - (nbx - 1), -qx, qy - (nby - 1), -qy)
+            while True:
+                for gy in range(max(0, qy - R), min(nby, qy + R + 1)):
+                    if gy == qy - R or gy == qy + R:
+                        gxs = range(max(0, qx - R), min(nbx, qx + R + 1))
+                    else:
+                        gxs = range(qx - R, qx + R + 1, 2 * R)  # R > 0 here
+                    for gx in gxs:
+                        if gx < 0 or gx >= nbx:
+                            continue
+                        b = gy * nbx + gx
+                        for q in range(bstart[b], bstart[b + 1]):
+                            t = bidx[q]
+                            dx = cx - pxy[t, 0]
+                            dy = cy - pxy[t, 1]
+                            seen += 1
+                            have = _insert(dx * dx + dy * dy, t, bd, bi, have, m)
+                if seen == n:
+                    break
+                lim = R * bsize
+                if have == m and bd[m - 1] < lim * lim:
+                    break
+                R += 1
+        prev = True
+        px_ = cx
+        py_ = cy
+        t_ = False
+        for j in range(k):
+            out[ci - c0, j] = bi[j]
+        for j in range(m - 1):
+            if bd[j] == bd[j + 1]:
+                t_ = True
+        tie[ci - c0] = t_
+
+
+def nearest_poses(cells: np.ndarray, pose_xy: np.ndarray, k: int, tree=None) -> np.ndarray:
+    """(n_cells, k) int64: for every cell centre [m] the indices of its ``k`` nearest poses [m]
+    (world frame), nearest first; the same poses in the same order as
+    ``scipy.spatial.cKDTree(pose_xy).query(cells, k)`` (tied cells are answered by the KD-tree).
+    """
+    cells = np.ascontiguousarray(cells, dtype=np.float64)
+    pxy = np.ascontiguousarray(pose_xy, dtype=np.float64)
+    n = len(pxy)
+    k = min(int(k), n)
+    lo = pxy.min(axis=0)
+    span = max(float((pxy.max(axis=0) - lo).max()), 1.0)  # [m]; poses all in one spot: 1 m
+    nb = max(1, int(np.sqrt(n * KNN_BUCKETS)))
+    bsize = span / nb * (1 + 1e-9)
+    nbx = nby = nb
+    gx = np.minimum((np.floor((pxy[:, 0] - lo[0]) / bsize)).astype(np.int64), nbx - 1)
+    gy = np.minimum((np.floor((pxy[:, 1] - lo[1]) / bsize)).astype(np.int64), nby - 1)
+    b = gy * nbx + gx
+    order = np.argsort(b, kind="stable")
+    bstart = np.searchsorted(b[order], np.arange(nbx * nby + 1)).astype(np.int64)
+    out = np.empty((len(cells), k), np.int64)
+    tie = np.zeros(len(cells), np.bool_)
+    warm(_knn_block)
+    _knn_block(cells, pxy, k, 0, len(cells), float(lo[0]), float(lo[1]), float(bsize), nbx, nby,
+               bstart, order.astype(np.int64), out, tie)
+    if tie.any():
+        from scipy.spatial import cKDTree
+        tree = tree if tree is not None else cKDTree(pxy)
+        _, nn = tree.query(cells[tie], k=k)
+        out[tie] = np.asarray(nn).reshape(-1, k)
+    return out
+
+
+@njit(cache=True, nogil=True)
+def _cells_kernel(c0, c1, cells, poses, nn, reach, ranges, bearings, cls_hit, srt, key, seg_start,
+                  seg_len, bin_lo, dense, sbearing, bin_scale, bins, continuous, z_max, half, wb2,
+                  bmin, bmax, l, step, count_kind, ka, kb, kc3, kinv2pi, sigma0, n_off, bcos, bsin,
+                  acc, pairs):  # pragma: no cover - compiled
+    """Evidence of cells c0:c1 into ``acc`` (n_cells, K); ``pairs[0]`` counts the (cell, pose)
+    pairs inside the field, ``pairs[1]`` the free samples evaluated."""
+    n_classes = acc.shape[1]
+    free = n_classes - 1
+    all_poses = nn.shape[0] == 0
+    n_per = poses.shape[0] if all_poses else nn.shape[1]
+    s_end = np.zeros(n_classes)
+    s_off = np.zeros(n_off)
+    lim = l + 1e-9
+    n_pairs = 0
+    n_samp = 0
+    n_fast = 0
+    k = 0
+    diff = 0.0
+    zk = 0.0
+    near = False
+    wide = False
+    reach_ok = False
+    for ci in range(c0, c1):
+        cx = cells[ci, 0]
+        cy = cells[ci, 1]
+        for c in range(n_classes):
+            s_end[c] = 0.0
+        for o in range(n_off):
+            s_off[o] = 0.0
+        for q in range(n_per):
+            t = q if all_poses else nn[ci, q]
+            px = poses[t, 0]
+            py = poses[t, 1]
+            if all_poses:
+                if not ((cx - px) ** 2 + (cy - py) ** 2 < reach[t] ** 2):
+                    continue
+            dx = cx - px
+            dy = cy - py
+            r = math.sqrt(dx ** 2 + dy ** 2)
+            if not (r > 0.0 and r < z_max):
+                continue
+            # The bearing's decisions (field, nearest beam, beam width or gap) from a fast
+            # arctangent within EPS; any decision closer than EPS to its threshold is taken
+            # again with the exact bearing, so the outcome is the exact one.
+            sure = False
+            if not dense[t]:
+                pa = _wrap(_atan2_fast(dy, dx) - poses[t, 2])
+                if abs(pa) < PI - EPS:
+                    k, diff, sure = _nearest_fast(t, pa, bearings, srt, seg_start, seg_len,
+                                                  bin_lo, sbearing, bin_scale, bins)
+                if sure:
+                    if not continuous:
+                        lo_ = bmin[t] - wb2 - 1e-9
+                        hi_ = bmax[t] + wb2 + 1e-9
+                        wraps = (bmin[t] - wb2 <= -PI + 1e-9) or (bmax[t] + wb2 >= PI - 1e-9)
+                        if not wraps and (abs(pa - lo_) < EPS or abs(pa - hi_) < EPS):
+                            sure = False
+                        reach_ok = wraps or (pa >= lo_ and pa <= hi_)
+                        if abs(diff - wb2) < EPS:
+                            sure = False
+                        wide = diff > wb2
+                    else:
+                        zk = ranges[k]
+                        if r - zk >= lim:
+                            near = False
+                        elif abs(diff - PI / 2) < EPS:
+                            sure = False
+                        elif diff < PI / 2:
+                            g_ = r * math.sin(diff)
+                            if abs(g_ - lim) <= r * EPS + 1e-12:
+                                sure = False
+                            near = g_ < lim
+                        else:
+                            near = r < lim
+            if not sure:
+                phi = _wrap(math.atan2(dy, dx) - poses[t, 2])
+                if not (phi > -PI and phi < PI):
+                    continue
+                if not continuous:
+                    lo_ = bmin[t] - wb2
+                    hi_ = bmax[t] + wb2
+                    wraps = (lo_ <= -PI + 1e-9) or (hi_ >= PI - 1e-9)
+                    reach_ok = wraps or (phi >= lo_ - 1e-9 and phi <= hi_ + 1e-9)
+                k, diff = _nearest(t, phi, bearings, srt, key, seg_start, seg_len, bin_lo, dense,
+                                   sbearing, bin_scale, bins)
+                wide = diff > wb2
+                if continuous:
+                    zk = ranges[k]
+                    gap = r * math.sin(diff) if diff < PI / 2 else r
+                    if r - zk > gap:
+                        gap = r - zk
+                    near = gap < lim
+            else:
+                n_fast += 1
+            n_pairs += 1
+            zk = ranges[k]
+            if not continuous:
+                if not reach_ok:
+                    continue
+                outside = (r > min(z_max, zk + half)) or wide
+                hit = (not outside) and zk < z_max and abs(r - zk) < half
+                if hit:
+                    acc[ci, cls_hit[k]] += 1.0
+                elif (not outside) and r < zk and zk < z_max:
+                    acc[ci, free] += 1.0
+                continue
+            if not near:
+                continue
+            c = bcos[k]
+            s = bsin[k]
+            d1 = math.sqrt((cx - (px + zk * c)) ** 2 + (cy - (py + zk * s)) ** 2)
+            if d1 < l:
+                s_end[cls_hit[k]] += _kernel(d1, ka, kb, kc3, kinv2pi, sigma0)
+            tt = dx * c + dy * s
+            e = dx * s - dy * c
+            if not (abs(e) < l and tt > -l and tt < zk + l):
+                continue
+            if count_kind == 3:  # arange_world
+                zw = math.sqrt((px - (px + zk * c)) ** 2 + (py - (py + zk * s)) ** 2)
+                cnt = max(math.ceil(zw / step), 0.0)
+                count = int(cnt)
+            elif count_kind == 2:  # arange
+                count = int(max(math.ceil(zk / step), 0.0))
+            else:
+                count = int(math.ceil(zk / step))
+                if (count - 1) * step >= zk:
+                    count -= 1
+                if count * step < zk:
+                    count += 1
+                if count_kind == 1 and count * step < zk + 1e-9:
+                    count += 1
+            j_lo = int(math.floor((tt - l) / step))
+            if j_lo < 0:
+                j_lo = 0
+            j_hi = int(math.ceil((tt + l) / step))
+            if j_hi > count - 1:
+                j_hi = count - 1
+            for o in range(n_off):
+                j = j_lo + o
+                if j > j_hi:
+                    break
+                sj = j * step
+                d2 = math.sqrt((cx - (px + sj * c)) ** 2 + (cy - (py + sj * s)) ** 2)
+                n_samp += 1
+                if d2 < l:
+                    s_off[o] += _kernel(d2, ka, kb, kc3, kinv2pi, sigma0)
+        if continuous:
+            for c in range(free):
+                acc[ci, c] += s_end[c]
+            for o in range(n_off):
+                acc[ci, free] += s_off[o]
+    pairs[0] += n_pairs
+    pairs[1] += n_samp
+    pairs[2] += n_fast
+
+
+
+@njit(cache=True, nogil=True)
+def _poses_kernel(row0, row1, gx, gy, poses, reach, ranges, bearings, cls_hit, srt, key,
+                  seg_start, seg_len, bin_lo, dense, sbearing, bin_scale, bins, continuous, z_max,
+                  half, wb2, bmin, bmax, l, step, count_kind, ka, kb, kc3, kinv2pi, sigma0, n_off,
+                  bcos, bsin, acc, s_end, s_off, pairs):  # pragma: no cover - compiled
+    """``nearest_poses=None``, pose by pose: the cells of rows row0:row1 within the pose's reach,
+    each pair exactly as :func:`_cells_kernel` (a cell meets its poses in index order, the order
+    of the cell-by-cell path), the continuous sums kept per cell in ``s_end`` (n_cells, K) and
+    ``s_off`` (n_cells, n_off) and added to ``acc`` at the end in the same order. Keeping one
+    pose's beam index hot in the cache makes this several times faster than cell by cell."""
+    n_classes = acc.shape[1]
+    free = n_classes - 1
+    nx = gx.shape[0]
+    g = (gx[nx - 1] - gx[0]) / (nx - 1) if nx > 1 else 1.0
+    gyy = (gy[gy.shape[0] - 1] - gy[0]) / (gy.shape[0] - 1) if gy.shape[0] > 1 else 1.0
+    lim = l + 1e-9
+    n_pairs = 0
+    n_samp = 0
+    n_fast = 0
+    k = 0
+    diff = 0.0
+    zk = 0.0
+    near = False
+    wide = False
+    reach_ok = False
+    for t in range(poses.shape[0]):
+        px = poses[t, 0]
+        py = poses[t, 1]
+        rt = reach[t]
+        ix0 = max(0, int(math.floor((px - rt - gx[0]) / g)) - 1)
+        ix1 = min(nx - 1, int(math.ceil((px + rt - gx[0]) / g)) + 1)
+        iy0 = max(row0, int(math.floor((py - rt - gy[0]) / gyy)) - 1)
+        iy1 = min(row1 - 1, int(math.ceil((py + rt - gy[0]) / gyy)) + 1)
+        for iy in range(iy0, iy1 + 1):
+            cy = gy[iy]
+            for ix in range(ix0, ix1 + 1):
+                cx = gx[ix]
+                if not ((cx - px) ** 2 + (cy - py) ** 2 < rt ** 2):
+                    continue
+                ci = iy * nx + ix
+                dx = cx - px
+                dy = cy - py
+                r = math.sqrt(dx ** 2 + dy ** 2)
+                if not (r > 0.0 and r < z_max):
+                    continue
+                # The bearing's decisions (field, nearest beam, beam width or gap) from a fast
+                # arctangent within EPS; any decision closer than EPS to its threshold is taken
+                # again with the exact bearing, so the outcome is the exact one.
+                sure = False
+                if not dense[t]:
+                    pa = _wrap(_atan2_fast(dy, dx) - poses[t, 2])
+                    if abs(pa) < PI - EPS:
+                        k, diff, sure = _nearest_fast(t, pa, bearings, srt, seg_start, seg_len,
+                                                      bin_lo, sbearing, bin_scale, bins)
+                    if sure:
+                        if not continuous:
+                            lo_ = bmin[t] - wb2 - 1e-9
+                            hi_ = bmax[t] + wb2 + 1e-9
+                            wraps = (bmin[t] - wb2 <= -PI + 1e-9) or (bmax[t] + wb2 >= PI - 1e-9)
+                            if not wraps and (abs(pa - lo_) < EPS or abs(pa - hi_) < EPS):
+                                sure = False
+                            reach_ok = wraps or (pa >= lo_ and pa <= hi_)
+                            if abs(diff - wb2) < EPS:
+                                sure = False
+                            wide = diff > wb2
+                        else:
+                            zk = ranges[k]
+                            if r - zk >= lim:
+                                near = False
+                            elif abs(diff - PI / 2) < EPS:
+                                sure = False
+                            elif diff < PI / 2:
+                                g_ = r * math.sin(diff)
+                                if abs(g_ - lim) <= r * EPS + 1e-12:
+                                    sure = False
+                                near = g_ < lim
+                            else:
+                                near = r < lim
+                if not sure:
+                    phi = _wrap(math.atan2(dy, dx) - poses[t, 2])
+                    if not (phi > -PI and phi < PI):
+                        continue
+                    if not continuous:
+                        lo_ = bmin[t] - wb2
+                        hi_ = bmax[t] + wb2
+                        wraps = (lo_ <= -PI + 1e-9) or (hi_ >= PI - 1e-9)
+                        reach_ok = wraps or (phi >= lo_ - 1e-9 and phi <= hi_ + 1e-9)
+                    k, diff = _nearest(t, phi, bearings, srt, key, seg_start, seg_len, bin_lo, dense,
+                                       sbearing, bin_scale, bins)
+                    wide = diff > wb2
+                    if continuous:
+                        zk = ranges[k]
+                        gap = r * math.sin(diff) if diff < PI / 2 else r
+                        if r - zk > gap:
+                            gap = r - zk
+                        near = gap < lim
+                else:
+                    n_fast += 1
+                n_pairs += 1
+                zk = ranges[k]
+                if not continuous:
+                    if not reach_ok:
+                        continue
+                    outside = (r > min(z_max, zk + half)) or wide
+                    hit = (not outside) and zk < z_max and abs(r - zk) < half
+                    if hit:
+                        acc[ci, cls_hit[k]] += 1.0
+                    elif (not outside) and r < zk and zk < z_max:
+                        acc[ci, free] += 1.0
+                    continue
+                if not near:
+                    continue
+                c = bcos[k]
+                s = bsin[k]
+                d1 = math.sqrt((cx - (px + zk * c)) ** 2 + (cy - (py + zk * s)) ** 2)
+                if d1 < l:
+                    s_end[ci, cls_hit[k]] += _kernel(d1, ka, kb, kc3, kinv2pi, sigma0)
+                tt = dx * c + dy * s
+                e = dx * s - dy * c
+                if not (abs(e) < l and tt > -l and tt < zk + l):
+                    continue
+                if count_kind == 3:  # arange_world
+                    zw = math.sqrt((px - (px + zk * c)) ** 2 + (py - (py + zk * s)) ** 2)
+                    cnt = max(math.ceil(zw / step), 0.0)
+                    count = int(cnt)
+                elif count_kind == 2:  # arange
+                    count = int(max(math.ceil(zk / step), 0.0))
+                else:
+                    count = int(math.ceil(zk / step))
+                    if (count - 1) * step >= zk:
+                        count -= 1
+                    if count * step < zk:
+                        count += 1
+                    if count_kind == 1 and count * step < zk + 1e-9:
+                        count += 1
+                j_lo = int(math.floor((tt - l) / step))
+                if j_lo < 0:
+                    j_lo = 0
+                j_hi = int(math.ceil((tt + l) / step))
+                if j_hi > count - 1:
+                    j_hi = count - 1
+                for o in range(n_off):
+                    j = j_lo + o
+                    if j > j_hi:
+                        break
+                    sj = j * step
+                    d2 = math.sqrt((cx - (px + sj * c)) ** 2 + (cy - (py + sj * s)) ** 2)
+                    n_samp += 1
+                    if d2 < l:
+                        s_off[ci, o] += _kernel(d2, ka, kb, kc3, kinv2pi, sigma0)
+    if continuous:
+        for iy in range(row0, row1):
+            for ci in range(iy * nx, (iy + 1) * nx):
+                for c in range(free):
+                    acc[ci, c] += s_end[ci, c]
+                for o in range(n_off):
+                    acc[ci, free] += s_off[ci, o]
+    pairs[0] += n_pairs
+    pairs[1] += n_samp
+    pairs[2] += n_fast
+
+
+def beam_directions(table, poses) -> tuple:
+    """cos and sin of every beam's world bearing ``bearing + heading`` [rad] (as the numpy path
+    computes them per pair: the same value, once per beam)."""
+    theta = table.bearings + np.asarray(poses, dtype=float)[table.pose_of, 2]
+    return np.cos(theta), np.sin(theta)
+
+
+COUNT_KINDS = {"strict": 0, "through": 1, "arange": 2, "arange_world": 3}
+
+
+def threads() -> int:
+    """Threads for the per-cell kernels: ``HW4_THREADS`` (default 1). The map is the same bit for
+    bit on any number (cells are independent and each cell's sums keep their order)."""
+    try:
+        return max(1, int(os.environ.get("HW4_THREADS", "1")))
+    except ValueError:
+        return 1
+
+
+def cell_evidence(cells, poses, nn, reach, table, cls_hit, n_classes, *, continuous, z_max,
+                  w_obstacle, w_beam, sigma0, l, step, sample_count="strict", n_threads=None,
+                  stats=None, grid=None) -> np.ndarray:
+    """(n_cells, n_classes) evidence, ``beams='nearest'``; see :func:`hw4.core.evidence.count_evidence`.
+
+    nn : (n_cells, k) int64 nearest poses per cell, or None for all poses (pose order).
+    reach : (T,) [m] the pose's longest beam plus half an obstacle (discrete) or l (continuous).
+    stats : dict, optional; receives ``pairs`` (cell-pose pairs inside the field) and
+        ``samples`` (free samples evaluated).
+    grid : Grid, optional; with ``nn=None`` the pairs are visited pose by pose (same sums).
+    """
+    cells = np.ascontiguousarray(cells, dtype=np.float64)
+    acc = np.zeros((len(cells), n_classes))
+    nn = np.zeros((0, 1), np.int64) if nn is None else np.ascontiguousarray(nn, dtype=np.int64)
+    n_off = int(np.ceil(2 * l / step)) + 2
+    from .sensor import BINS
+    args = (cells, np.ascontiguousarray(poses, dtype=np.float64), nn,
+            np.ascontiguousarray(reach, dtype=np.float64), table.ranges, table.bearings,
+            np.ascontiguousarray(cls_hit, dtype=np.int64), table._sorted.astype(np.int64),
+            table._key, table._seg_start.astype(np.int64), table._seg_len.astype(np.int64),
+            table._bin_lo, table._dense, table._sorted_bearing, BINS / TWO_PI, BINS,
+            bool(continuous), float(z_max), float(w_obstacle) / 2, float(w_beam) / 2,
+            table.bearing_min, table.bearing_max, float(l), float(step),
+            COUNT_KINDS[sample_count], 2.0 * np.pi / l, -1.0 / (3.0 * l), 1.0 / 3.0,
+            1.0 / (2.0 * np.pi), float(sigma0), n_off, *beam_directions(table, poses))
+    warm(_cells_kernel if grid is None or nn.shape[0] else _poses_kernel)
+    n = len(cells)
+    nt = min(threads() if n_threads is None else int(n_threads), max(1, n // 256))
+    if nn.shape[0] == 0 and grid is not None:
+        ny = len(grid.y)
+        nt = min(nt, ny)
+        rest = args[3:] + (acc, np.zeros((n, n_classes)) if continuous else np.zeros((1, 1)),
+                           np.zeros((n, n_off)) if continuous else np.zeros((1, 1)))
+        rows = np.linspace(0, ny, nt + 1).astype(int)
+        pairs = np.zeros((nt, 3), np.int64)
+        run = lambda i: _poses_kernel(rows[i], rows[i + 1], grid.x, grid.y, args[1], *rest,
+                                      pairs[i])
+        if nt <= 1:
+            run(0)
+        else:
+            with ThreadPoolExecutor(nt) as ex:
+                list(ex.map(run, range(nt)))
+        pairs = pairs.sum(axis=0)
+    elif nt <= 1:
+        pairs = np.zeros(3, np.int64)
+        _cells_kernel(0, n, *args, acc, pairs)
+    else:
+        bounds = np.linspace(0, n, nt + 1).astype(int)
+        pairs = np.zeros((nt, 3), np.int64)
+        with ThreadPoolExecutor(nt) as ex:
+            list(ex.map(lambda i: _cells_kernel(bounds[i], bounds[i + 1], *args, acc, pairs[i]),
+                        range(nt)))
+        pairs = pairs.sum(axis=0)
+    if stats is not None:
+        stats["pairs"] = stats.get("pairs", 0) + int(pairs[0])
+        stats["samples"] = stats.get("samples", 0) + int(pairs[1])
+        stats["fast"] = stats.get("fast", 0) + int(pairs[2])
+    return acc
+
+
+@njit(cache=True, nogil=True)
+def _all_kernel(poses, first, ranges, bearings, cls_hit, free, gx, gy, g, cell_of_pose_start,
+                cell_of_pose, use_sel, z_max, l, step, ka, kb, kc3, kinv2pi, sigma0, acc,
+                scratch, touched, state, selected, pairs):  # pragma: no cover - compiled
+    """``beams='all'``: pose by pose, end points then free samples (beam order), each against the
+    cells within l; the pose's sums go into ``acc`` (flat, cell * K + class) after the pose."""
+    n_classes = acc.shape[0] // (gx.shape[0] * gy.shape[0])
+    nx = gx.shape[0]
+    ny = gy.shape[0]
+    R = int(math.ceil(l / g)) + 1
+    x0 = gx[0]
+    y0 = gy[0]
+    n_entries = 0
+    for t in range(poses.shape[0]):
+        px = poses[t, 0]
+        py = poses[t, 1]
+        h = poses[t, 2]
+        if use_sel:
+            for q in range(cell_of_pose_start[t], cell_of_pose_start[t + 1]):
+                selected[cell_of_pose[q]] = True
+        n_t = 0
+        b0 = first[t]
+        b1 = first[t + 1]
+        for phase in range(2):
+            for b in range(b0, b1):
+                theta = bearings[b] + h
+                c = math.cos(theta)
+                s = math.sin(theta)
+                z = ranges[b]
+                if phase == 0:
+                    ns = 1
+                else:
+                    ns = int(math.ceil(z / step))
+                    if (ns - 1) * step >= z:
+                        ns -= 1
+                    if ns * step < z:
+                        ns += 1
+                for jj in range(ns):
+                    if phase == 0:
+                        qx = px + z * c
+                        qy = py + z * s
+                        cls = cls_hit[b]
+                    else:
+                        sj = jj * step
+                        qx = px + sj * c
+                        qy = py + sj * s
+                        cls = free
+                    ix = int(np.rint((qx - x0) / g))
+                    iy = int(np.rint((qy - y0) / g))
+                    for cyy in range(max(iy - R, 0), min(iy + R + 1, ny)):
+                        ddy = gy[cyy] - qy
+                        if abs(ddy) >= l:
+                            continue
+                        for cxx in range(max(ix - R, 0), min(ix + R + 1, nx)):
+                            ddx = gx[cxx] - qx
+                            if abs(ddx) >= l:
+                                continue
+                            d = math.sqrt(ddx ** 2 + ddy ** 2)
+                            if not d < l:
+                                continue
+                            cell = cyy * nx + cxx
+                            if use_sel and not selected[cell]:
+                                continue
+                            st = state[cell]
+                            if st == 0:
+                                dx = gx[cxx] - px
+                                dy = gy[cyy] - py
+                                r = math.sqrt(dx ** 2 + dy ** 2)
+                                phi = _wrap(math.atan2(dy, dx) - h)
+                                st = 1 if (r > 0.0 and r < z_max and phi > -PI and phi < PI) else 2
+                                state[cell] = st
+                                touched[n_t] = cell
+                                n_t += 1
+                            if st != 1:
+                                continue
+                            n_entries += 1
+                            scratch[cell * n_classes + cls] += _kernel(d, ka, kb, kc3, kinv2pi,
+                                                                       sigma0)
+        for q in range(n_t):
+            cell = touched[q]
+            state[cell] = 0
+            for c in range(n_classes):
+                acc[cell * n_classes + c] += scratch[cell * n_classes + c]
+                scratch[cell * n_classes + c] = 0.0
+        if use_sel:
+            for q in range(cell_of_pose_start[t], cell_of_pose_start[t + 1]):
+                selected[cell_of_pose[q]] = False
+    pairs[0] += n_entries
+
+
+def all_beams_evidence(grid, poses, table, cls_hit, n_classes, nn, *, z_max, sigma0, l, step,
+                       stats=None) -> np.ndarray:
+    """(n_cells, n_classes) evidence, ``beams='all'`` (one thread; see ``count_evidence``).
+
+    nn : (n_cells, k) int64 nearest poses per cell, or None (every pose within z_max counts).
+    """
+    n_cells, n_poses = grid.n_cells, len(poses)
+    use_sel = nn is not None
+    if use_sel:
+        flat = nn.reshape(-1)
+        order = np.argsort(flat, kind="stable")
+        cell_of_pose = (order // nn.shape[1]).astype(np.int64)
+        start = np.searchsorted(flat[order], np.arange(n_poses + 1)).astype(np.int64)
+    else:
+        cell_of_pose = np.zeros(0, np.int64)
+        start = np.zeros(n_poses + 1, np.int64)
+    acc = np.zeros(n_cells * n_classes)
+    pairs = np.zeros(1, np.int64)
+    warm(_all_kernel)
+    _all_kernel(np.ascontiguousarray(poses, dtype=np.float64), table.first.astype(np.int64),
+                table.ranges, table.bearings, np.ascontiguousarray(cls_hit, dtype=np.int64),
+                n_classes - 1, grid.x, grid.y, float(grid.grid_size), start, cell_of_pose,
+                use_sel, float(z_max), float(l), float(step), 2.0 * np.pi / l, -1.0 / (3.0 * l),
+                1.0 / 3.0, 1.0 / (2.0 * np.pi), float(sigma0), acc, np.zeros(n_cells * n_classes),
+                np.zeros(n_cells, np.int64), np.zeros(n_cells, np.int8),
+                np.zeros(n_cells if use_sel else 1, np.bool_), pairs)
+    if stats is not None:
+        stats["pairs"] = stats.get("pairs", 0) + int(pairs[0])
+    return acc.reshape(n_cells, n_classes)
+
+
+_announced = False
+
+
+def _cached(kernel) -> bool:
+    """True when numba's cache holds ``kernel`` for this source (index newer than this file)."""
+    try:
+        index = kernel._cache._cache_file._index_path
+        return os.path.exists(index) and os.path.getmtime(index) >= os.path.getmtime(__file__)
+    except (AttributeError, OSError):
+        return False
+
+
+def warm(*kernels, announce: bool = True) -> None:
+    """Before a kernel's first call in a process: when numba's cache does not hold it (the first
+    run after an install or a change), say once on stderr that the kernels are being compiled
+    (10-30 s, once). Cheap otherwise (one stat per kernel)."""
+    global _announced
+    if _announced or not announce:
+        return
+    if not all(_cached(k) for k in kernels):
+        _announced = True
+        print("hw4: compiling the counting kernels (once after an install; 10-30 s) ...",
+              file=sys.stderr, flush=True)
