@@ -1,6 +1,7 @@
 """Regrades (``grade --batch --previous OLD`` writes ``changes.csv``), identical results for the
 same submission graded twice, and the similarity columns of ``grades.csv``. Submissions of one
-task file at 1 m so that each batch takes a few seconds (about 30 s in all).
+task file at 1 m (2 m for the repeat) so that each run takes a few seconds (about 45 s in all
+on this shared machine).
 """
 from __future__ import annotations
 
@@ -64,8 +65,8 @@ def test_regrade_lists_changes_and_why(tmp_path, capsys):
 def test_same_submission_twice_gives_identical_results(tmp_path):
     sub = _one_task(tmp_path / "s", "labels off by one")
     shutil.copyfile(FIX / "exact" / "ogm_continuous_CSM.py", sub / "ogm_continuous_CSM.py")
-    a = grade(sub, tmp_path / "a", grid_sizes=[1.0])
-    b = grade(sub, tmp_path / "b", grid_sizes=[1.0])
+    a = grade(sub, tmp_path / "a", grid_sizes=[2.0])
+    b = grade(sub, tmp_path / "b", grid_sizes=[2.0])
     for r in (a, b):
         for k in TIMING_FIELDS:
             r.pop(k)
