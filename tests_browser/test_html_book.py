@@ -676,3 +676,168 @@ def test_figure_viewer_pans_and_pinches_on_a_phone(driver, book_url):
         driver.execute_script("document.querySelector('dialog.hw4-zoom').close()")
     finally:
         driver.execute_cdp_cmd("Emulation.setTouchEmulationEnabled", {"enabled": False})
+
+
+# ------------------------------------------------------------------------------------------------
+# Videos, search field, sidebar, code text (issue 24, part 8). About 10 page loads, ~15 s.
+VIDEO_PAGES = ("notebooks/T5_bki_3d.html", "notebooks/T6_evaluation_studies.html")
+
+VIDEO_ATTRS = """
+const done = arguments[arguments.length - 1];
+const vs = Array.from(document.querySelectorAll("video"));
+function poster(v) {  // the poster as loaded: its size and how much its pixels vary
+  return new Promise(r => {
+    if (!v.poster) return r(null);
+    const i = new Image();
+    i.onload = () => {
+      const c = document.createElement("canvas"); c.width = 64; c.height = 40;
+      const g = c.getContext("2d"); g.drawImage(i, 0, 0, 64, 40);
+      const d = g.getImageData(0, 0, 64, 40).data;
+      let s = 0, s2 = 0, n = 0, colour = 0;
+      for (let k = 0; k < d.length; k += 4) {
+        const y = (d[k] + d[k + 1] + d[k + 2]) / 3; s += y; s2 += y * y; n++;
+        if (Math.max(d[k], d[k + 1], d[k + 2]) - Math.min(d[k], d[k + 1], d[k + 2]) > 60) colour++;
+      }
+      r({w: i.naturalWidth, h: i.naturalHeight, std: Math.sqrt(s2 / n - (s / n) ** 2),
+         colour: colour / n});
+    };
+    i.onerror = () => r(null);
+    i.src = v.poster;
+  });
+}
+Promise.all(vs.map(poster)).then(ps => done(vs.map((v, k) => ({
+  src: (v.querySelector("source") || {}).src || v.src, preload: v.getAttribute("preload"),
+  label: v.getAttribute("aria-label"), title: v.getAttribute("title"), poster: ps[k]}))));
+"""
+
+
+@pytest.mark.parametrize("page", VIDEO_PAGES)
+def test_videos_have_a_poster_preload_metadata_and_a_label(driver, book_url, page):
+    """Every video shows a poster frame with the map (not a black or blank frame) before it plays,
+    loads only its metadata with the page (Task 5's page would otherwise fetch 3 MB of video at
+    once), and has a descriptive label for screen readers (aria-label, and a title)."""
+    _viewport(driver, WIDE)
+    driver.get(book_url + page)   # not _open: its wait turns every video's preload to "auto"
+    videos = driver.execute_async_script(VIDEO_ATTRS)
+    assert videos, f"{page}: no video"
+    for v in videos:
+        name = v["src"].rsplit("/", 1)[-1]
+        assert v["preload"] == "metadata", f"{page}: {name} preload={v['preload']!r}"
+        assert v["poster"] is not None, f"{page}: {name} has no poster frame (or it did not load)"
+        assert v["poster"]["w"] >= 320, f"{page}: {name}'s poster is {v['poster']['w']} px wide"
+        assert v["poster"]["std"] > 10, f"{page}: {name}'s poster is a blank frame {v['poster']}"
+        label = v["label"] or ""
+        assert len(label) >= 25 and label.lower() not in ("video", "video: "), (
+            f"{page}: {name} is labelled {label!r}")
+        assert v["title"] == label, f"{page}: {name}'s title {v['title']!r} is not its label"
+        if "rviz" in name:   # RViz's map in class colours: the poster shows the map, not RViz's start
+            assert v["poster"]["colour"] > 0.05, f"{page}: {name}'s poster shows no map {v['poster']}"
+
+
+SEARCH_FIELD = """
+return Array.from(document.querySelectorAll(arguments[0])).map(f => {
+  const i = f.querySelector("i.fa-magnifying-glass"), inp = f.querySelector("input");
+  const r = inp.getBoundingClientRect(), q = i ? i.getBoundingClientRect() : null;
+  return {visible: r.width > 0 && r.height > 0, iconRight: q && q.width ? q.right : null,
+          textLeft: r.left + parseFloat(getComputedStyle(inp).paddingLeft)
+                    + parseFloat(getComputedStyle(inp).borderLeftWidth)};
+}).filter(f => f.visible);
+"""
+
+
+def test_search_text_starts_right_of_the_icon(driver, book_url):
+    """The magnifier does not cover the first letter typed: on the search page and in the search
+    dialog (Ctrl+K) the input's text starts to the right of the icon."""
+    from selenium.webdriver.common.action_chains import ActionChains
+    from selenium.webdriver.common.keys import Keys
+    _viewport(driver, WIDE)
+    driver.get(book_url + "search.html")
+    fields = driver.execute_script(SEARCH_FIELD, "#main-content form.bd-search, form.bd-search")
+    assert fields, "search.html: no visible search field"
+    for f in fields:
+        if f["iconRight"] is not None:
+            assert f["textLeft"] >= f["iconRight"] + 2, f"search.html: the icon covers the text {f}"
+    _open(driver, book_url + "notebooks/T1_discrete_csm.html")
+    ActionChains(driver).key_down(Keys.CONTROL).send_keys("k").key_up(Keys.CONTROL).perform()
+    time.sleep(0.4)
+    assert driver.execute_script("return document.getElementById('pst-search-dialog').open")
+    fields = driver.execute_script(SEARCH_FIELD, "#pst-search-dialog form.bd-search")
+    assert fields and fields[0]["iconRight"] is not None, f"the search dialog's field: {fields}"
+    assert fields[0]["textLeft"] >= fields[0]["iconRight"] + 2, (
+        f"the search dialog's icon covers the text {fields[0]}")
+    driver.execute_script("document.getElementById('pst-search-dialog').close()")
+
+
+SIDEBAR = """
+const s = document.querySelector("div.bd-sidebar"), box = s.getBoundingClientRect();
+const brand = s.querySelector(".navbar-brand") || s.querySelector(".sidebar-primary-items__start");
+const links = s.querySelectorAll(".bd-docs-nav a.current, .bd-docs-nav li.active > a");
+const link = links[links.length - 1];
+return {scrollTop: s.scrollTop, top: box.top, bottom: box.top + s.clientHeight,
+        brandTop: brand.getBoundingClientRect().top,
+        linkBottom: link ? link.getBoundingClientRect().bottom : null};
+"""
+
+
+@pytest.mark.parametrize("page", ("notebooks/T5_bki_3d.html", "notebooks/T5_beyond.html",
+                                  "notebooks/T6_evaluation_studies.html"))
+def test_sidebar_opens_with_the_books_title_in_view(driver, book_url, page):
+    """At 1400 px the chapter list of the last chapters opens with the book's title in view and the
+    page's own link too, opened directly and after a page whose sidebar was scrolled down."""
+    _viewport(driver, WIDE)
+    _open(driver, book_url + "notebooks/T1_discrete_csm.html")
+    driver.execute_script("sessionStorage.clear()")
+    for how in ("opened directly", "after a scrolled sidebar"):
+        _open(driver, book_url + page)
+        time.sleep(0.3)
+        s = driver.execute_script(SIDEBAR)
+        assert s["linkBottom"] is not None, f"{page}: no current link in the chapter list"
+        assert s["linkBottom"] <= s["bottom"] + 1, f"{page} ({how}): its link is out of view {s}"
+        assert s["brandTop"] >= s["top"] - 1, (
+            f"{page} ({how}): the chapter list opens scrolled past the book's title {s}")
+        _open(driver, book_url + "notebooks/T1_discrete_csm.html")
+        driver.execute_script("document.querySelector('div.bd-sidebar').scrollTop = 10000")
+
+
+def test_code_text_is_not_tiny_beside_the_prose(driver, book_url):
+    """Code cells at 1400 px: at least 13 px beside the 16 px prose (was 11.5 px)."""
+    _viewport(driver, WIDE)
+    _open(driver, book_url + "notebooks/T2_continuous_csm.html")
+    sizes = driver.execute_script(
+        "const px = e => parseFloat(getComputedStyle(e).fontSize);"
+        "const pre = Array.from(document.querySelectorAll('.bd-article div.cell_input pre'))"
+        "  .filter(p => p.offsetParent);"
+        "return {prose: px(document.querySelector('.bd-article p')), code: pre.map(px)};")
+    assert sizes["code"], "T2: no code cell shown"
+    assert sizes["prose"] == 16, sizes
+    assert min(sizes["code"]) >= 13, f"T2: code text of {min(sizes['code'])} px beside 16 px prose"
+
+
+@pytest.mark.parametrize("width", (WIDE, NARROW))
+def test_command_lines_break_at_spaces_not_hyphens(driver, book_url, width):
+    """An inline command line (Task 5: `... --scans 100`) breaks only between its words: no word
+    of it, such as --scans, is split over two lines at its hyphens."""
+    _viewport(driver, width)
+    _open(driver, book_url + "notebooks/T5_bki_3d.html")
+    split = driver.execute_script(
+        "return Array.from(document.querySelectorAll('.bd-article code.literal span.pre'))"
+        ".filter(t => t.textContent.length <= 24 && t.offsetParent && t.getClientRects().length > 1)"
+        ".map(t => t.textContent);")
+    assert not split, f"T5 at {width} px: words of inline code split over two lines: {split}"
+
+
+@pytest.mark.parametrize("width", (WIDE, NARROW))
+def test_the_3d_views_still_zooms_like_every_figure(driver, book_url, width):
+    """Task 5's 3D-view still opens in the zoom viewer like the other figures (a link around it;
+    on a phone a Zoom button under it) until its button loads the view."""
+    _viewport(driver, width)
+    _open(driver, book_url + INTERACTIVE_PAGE)
+    got = driver.execute_script(
+        "const v = document.querySelector('.hw4-interactive');"
+        "const still = v.querySelector('img.hw4-interactive-still');"
+        "const b = v.querySelector('button.hw4-zoom-button');"
+        "return {link: !!(still && still.closest('a.hw4-image-link')),"
+        "        button: !!b && b.getBoundingClientRect().height > 0};")
+    assert got["link"], f"{INTERACTIVE_PAGE} at {width} px: the 3D view's still is not zoomable"
+    assert got["button"] == (width < 768), (
+        f"{INTERACTIVE_PAGE} at {width} px: Zoom button shown {got['button']} (only on a phone)")

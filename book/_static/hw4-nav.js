@@ -20,7 +20,8 @@
  *    measured again when the window changes width; what is still wider scrolls in its own box.
  * 5. Line breaks: an inline formula stays on one line with the bracket before it, the unit and
  *    punctuation after it, and the value glued after a formula ending in "=" ("l = 0.2 m,"); a
- *    short inline literal (an option such as --video) is never broken.
+ *    short inline literal (an option such as --video) is never broken, and a long one (a command
+ *    line) only at its spaces, not at the hyphens of "--scans".
  * 6. Video players are one control bar taller than their frame (the frame at the top, see
  *    hw4-book.css), so the paused player's controls do not cover the plot.
  * 7. The header's download menu offers the whole book's PDF (the link at the foot of the chapter
@@ -32,6 +33,10 @@
  *    scrolls the page instead of turning the map; a tap lifts the veil, a touch elsewhere lowers it.
  * 9. A table or code cell wider than its column shows that it scrolls: a shade at each edge that
  *    has more to show (hw4-book.css), updated as it scrolls and when the window changes width.
+ * 10. The chapter list opens with the book's title in view: pydata-sphinx-theme scrolls the
+ *    sidebar until the current page's link sits a quarter down it whenever that link is in the
+ *    lower half of the window, which on the last chapters (T5, T5 beyond, T6) scrolls the title
+ *    away although the link was in view; the sidebar is scrolled back as far as the link allows.
  */
 (function () {
   "use strict";
@@ -315,12 +320,12 @@
 
   function linkImages() {
     var images = document.querySelectorAll(
-      ".bd-article figure img, .bd-article .cell_output img");
+      ".bd-article figure img, .bd-article .cell_output img, .bd-article img.hw4-interactive-still");
     Array.prototype.forEach.call(images, function (img) {
       var src = img.getAttribute("src");
-      // already a link, or inline data a browser will not open as a page
-      // (the still of an interactive view is replaced by the view on a click: not a figure)
-      if (!src || /^data:/.test(src) || img.closest("a") || img.closest(".hw4-interactive")) {
+      // already a link, or inline data a browser will not open as a page (the still of an
+      // interactive view zooms like any figure until its button replaces it by the view)
+      if (!src || /^data:/.test(src) || img.closest("a")) {
         return;
       }
       var link = document.createElement("a");
@@ -494,7 +499,16 @@
     Array.prototype.forEach.call(literals, function (code) {
       if (code.textContent.length <= 24) {
         code.classList.add("hw4-code-short");
+        return;
       }
+      // a long literal (a command line) breaks at its spaces only: each short token (Sphinx's
+      // span.pre, e.g. "--scans") stays whole, never split at its hyphens; a token longer than
+      // a line (a file path) may still break anywhere
+      Array.prototype.forEach.call(code.querySelectorAll("span.pre"), function (token) {
+        if (token.textContent.length <= 24) {
+          token.classList.add("hw4-code-token");
+        }
+      });
     });
   }
 
@@ -614,7 +628,13 @@
         iframe.style.width = "100%";
         iframe.style.height = Math.max(still.offsetHeight, 300) + "px";
         iframe.style.border = "0";
-        view.replaceChild(iframe, still);
+        // the still, with the zoom link around it and the phone's Zoom button after it
+        var holder = still.closest("a.hw4-image-link") || still;
+        var zoom = holder.nextElementSibling;
+        view.replaceChild(iframe, holder);
+        if (zoom && zoom.classList.contains("hw4-zoom-button")) {
+          zoom.remove();
+        }
         button.remove();
         veil(view, iframe);
         iframe.focus();
@@ -639,4 +659,30 @@
   } else {
     document.addEventListener("DOMContentLoaded", setup);
   }
+
+  // 10. the chapter list scrolled only as far as the current page's link needs
+  function sidebarToTitle() {
+    var sidebar = document.querySelector("div.bd-sidebar");
+    var nav = document.querySelector(".bd-docs-nav");
+    if (!sidebar || !nav || !sidebar.clientHeight) {
+      return;
+    }
+    var active = nav.querySelectorAll("a.current, li.active > a");
+    var link = active[active.length - 1];
+    if (!link) {
+      return;
+    }
+    var box = sidebar.getBoundingClientRect(), r = link.getBoundingClientRect();
+    var bottom = r.bottom - box.top + sidebar.scrollTop;   // the link's foot in the sidebar's content
+    var needed = Math.max(0, Math.ceil(bottom + 1.5 * r.height - sidebar.clientHeight));
+    if (sidebar.scrollTop > needed) {
+      sidebar.scrollTop = needed;
+    }
+  }
+  if (document.readyState === "loading") {
+    document.addEventListener("DOMContentLoaded", sidebarToTitle);   // after the theme's own
+  } else {
+    sidebarToTitle();
+  }
+  window.addEventListener("load", sidebarToTitle);
 })();
