@@ -341,7 +341,7 @@ def _config(name: str | None, date: str | None = None) -> str:
 
     book = yaml.safe_load((ROOT / "_config.yml").read_text())
     cfg = {
-        "title": "Mapping with Counting Sensor Models: homework report",
+        "title": "NA 568 Mobile Robotics, Homework 4: Mapping",
         "author": _latex_text(name) if name else "NA 568 Mobile Robotics, Homework 4",
         "copyright": book.get("copyright", ""),
         "only_build_toc_files": True,
