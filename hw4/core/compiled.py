@@ -857,11 +857,11 @@ def _cached(kernel) -> bool:
 
 def warm(*kernels, announce: bool = True) -> None:
     """Before a kernel's first call in a process: when numba's cache does not hold it (the first
-    run after an install or a change), say once on stderr that the kernels are being compiled
-    (10-30 s, once). Cheap otherwise (one stat per kernel)."""
+    run after an install or a change), say once on stderr, when it is a terminal, that the
+    kernels are being compiled (10-30 s, once). Cheap otherwise (one stat per kernel)."""
     global _announced
-    if _announced or not announce:
-        return
+    if _announced or not announce or not getattr(sys.stderr, "isatty", lambda: False)():
+        return  # said in a terminal only: notebooks and piped runs keep their outputs
     if not all(_cached(k) for k in kernels):
         _announced = True
         print("hw4: compiling the counting kernels (once after an install; 10-30 s) ...",
