@@ -154,6 +154,35 @@ def glue_cells(nb: dict) -> list[dict]:
     return out
 
 
+GLUE_REF = re.compile(r"\{glue:(?:text|md|)\}`([A-Za-z_][\w]*)")
+
+
+def borrowed_glue(text: str, own: dict, others: list[dict]) -> list[dict]:
+    """Glue cells, each reduced to one record, for the values ``text`` cites that its chapter
+    ``own`` does not glue but another chapter does (Task 4's answer may quote a Task 3 number):
+    the value is that chapter's stored record, byte for byte."""
+    def records(nb):
+        out = {}
+        for cell in glue_cells(nb):
+            for o in cell["outputs"]:
+                name = o.get("metadata", {}).get("scrapbook", {}).get("name")
+                if name:
+                    out[name] = (cell, o)
+        return out
+    mine = records(own)
+    pool = {}
+    for nb in others:
+        for name, rec in records(nb).items():
+            pool.setdefault(name, rec)
+    cells = []
+    for name in dict.fromkeys(GLUE_REF.findall(text)):
+        if name not in mine and name in pool:
+            cell, o = pool[name]
+            cells.append({**copy.deepcopy(cell), "id": f"borrowed-{name}",
+                          "outputs": [copy.deepcopy(o)]})
+    return cells
+
+
 def background_equations(path: Path | None = None) -> dict[str, str]:
     """``{label: "B.k"}``: the book's numbers of the background chapter's labelled equations."""
     nb = _load(path or ROOT / "book" / "background.ipynb")
@@ -244,13 +273,15 @@ def _plan(task: int, text: str, nb: dict) -> list[tuple]:
 
 
 def task_notebook(task: int, text: str, nb: dict, equations: dict[str, str],
-                  elsewhere: set[str] = frozenset()) -> tuple[dict, list]:
+                  elsewhere: set[str] = frozenset(), others: list[dict] = ()) -> tuple[dict, list]:
     """The report's notebook for one task, and the figure names it holds.
 
-    ``elsewhere``: names the other tasks of the report hold (a caption may refer to them)."""
+    ``elsewhere``: names the other tasks of the report hold (a caption may refer to them);
+    ``others``: the other chapters, whose glued values the text may quote
+    (:func:`borrowed_glue`)."""
     figures = figure_cells(nb, folder=_folder(task))
     tables = _blocks(nb, "table")
-    cells = glue_cells(nb)
+    cells = glue_cells(nb) + borrowed_glue(text, nb, list(others))
     placed: list[str] = []
     pieces = _plan(task, text, nb)
     defined = {p[1].split()[0] for p in pieces if p[0] in ("figure", "table")} | set(elsewhere)
@@ -401,7 +432,9 @@ def build_sources(out: str | Path = SRC, name: str | None = None, root: Path = R
         texts[task] = text_path.read_text(encoding="utf-8").replace("{{video}}", videos)
     names = {p[1].split()[0] for t in TASKS for p in _plan(t, texts[t], nbs[t]) if p[0] != "md"}
     for task in TASKS:
-        books[task], placed[task] = task_notebook(task, texts[task], nbs[task], equations, names)
+        others = [nbs[t] for t in TASKS if t != task]
+        books[task], placed[task] = task_notebook(task, texts[task], nbs[task], equations, names,
+                                                  others)
     intro = (report_dir / "intro.md").read_text(encoding="utf-8")
     who = name or "(no name given)"
     intro = (intro.replace("{{student}}", who).replace("{{video}}", videos)
