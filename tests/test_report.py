@@ -205,3 +205,13 @@ def test_package_refuses_a_date_that_is_no_title_page_line(tmp_path, monkeypatch
         with pytest.raises(InputError, match="--date"):
             package.build_package("jdoe", out=tmp_path, date=bad)
     assert list(tmp_path.iterdir()) == []
+
+
+def test_held_out_free_points_as_the_evaluation_places_them():
+    """Task 2B states the held-out free points' spacing and end margin in words (no glue holds
+    them); they must be the evaluation's own constants."""
+    from hw4.evaluation import evaluate
+
+    text = " ".join((Path(__file__).resolve().parents[1] / "report" / "task2.md").read_text().split())
+    assert (f"points every {evaluate.FREE_STEP:g} m along their beams, stopping "
+            f"{evaluate.FREE_MARGIN:g} m short of the end point") in text
