@@ -511,8 +511,10 @@ def test_figures_zoom_in_the_page(driver, book_url, shots, width):
         driver.execute_script(
             "document.querySelectorAll('.bd-article a.hw4-image-link img')[1].scrollIntoView();"
             "document.querySelectorAll('.bd-article a.hw4-image-link')[1].click()")
-        viewer = _wait(driver, VIEWER_STATE, lambda v: v and v["open"] and v["scale"] > 0)
+        # the viewer's image is the full-size file: on a loaded machine it can take seconds
+        viewer = _wait(driver, VIEWER_STATE, lambda v: v and v["open"] and v["scale"] > 0, tries=200)
         assert viewer and viewer["open"], f"{FIGURE_PAGE}: a click on a figure opened no viewer"
+        assert viewer["natural"] > 0, f"{FIGURE_PAGE}: the viewer's image did not load in 20 s"
         assert viewer["url"] == page_url, f"the click left the page for {viewer['url']}"
         fit = min(1.0, viewer["paneWidth"] / viewer["natural"])
         assert viewer["scale"] >= min(READABLE, 1.0) or viewer["scale"] >= fit - 1e-3, (
