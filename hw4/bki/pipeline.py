@@ -118,13 +118,14 @@ class Step:
     map: VoxelMap
 
 
-def new_map(cfg: BKIConfig, method: str) -> VoxelMap:
-    """An empty voxel map with the settings of ``cfg``."""
-    return VoxelMap(cfg.resolution, cfg.num_class, method, cfg.sf2, cfg.ell, cfg.prior, cfg.var_thresh)
+def new_map(cfg: BKIConfig, method: str, engine: str = "compiled") -> VoxelMap:
+    """An empty voxel map with the settings of ``cfg`` (``engine``: see :class:`VoxelMap`)."""
+    return VoxelMap(cfg.resolution, cfg.num_class, method, cfg.sf2, cfg.ell, cfg.prior, cfg.var_thresh,
+                    engine=engine)
 
 
 def map_scans(loaders, cfg: BKIConfig, method: str = "sbki",
-              vmap: VoxelMap | None = None) -> Iterator[Step]:
+              vmap: VoxelMap | None = None, engine: str | None = None) -> Iterator[Step]:
     """Insert scans one after another; yield a :class:`Step` after each.
 
     Parameters
@@ -134,19 +135,25 @@ def map_scans(loaders, cfg: BKIConfig, method: str = "sbki",
     method : {"sbki", "scsm"}
     vmap : VoxelMap, optional
         Map to extend (default: a new one).
+    engine : {"compiled", "numpy"}, optional
+        Engine of the training data and of a new map (default: the map's, else "compiled"); the
+        same map bit for bit either way.
     """
-    vmap = vmap if vmap is not None else new_map(cfg, method)
+    engine = engine or (vmap.engine if vmap is not None else "compiled")
+    vmap = vmap if vmap is not None else new_map(cfg, method, engine)
     for i, load in enumerate(loaders):
         scan = validate_scan(load(), cfg.num_class)
-        td = training_data(scan, cfg.ds_resolution, cfg.free_resolution, cfg.max_range, cfg.num_class)
+        td = training_data(scan, cfg.ds_resolution, cfg.free_resolution, cfg.max_range, cfg.num_class,
+                           engine=engine)
         vmap.update(td.points, td.labels)
         yield Step(i, scan, td, vmap)
 
 
-def build_map(loaders, cfg: BKIConfig, method: str = "sbki") -> tuple[VoxelMap, int, int]:
+def build_map(loaders, cfg: BKIConfig, method: str = "sbki",
+              engine: str = "compiled") -> tuple[VoxelMap, int, int]:
     """Insert every scan; return the map and the total numbers of training hits and free points."""
     hits = free = 0
-    vmap = new_map(cfg, method)
+    vmap = new_map(cfg, method, engine)
     for step in map_scans(loaders, cfg, method, vmap):
         hits += step.training.n_hits
         free += step.training.n_free

@@ -48,6 +48,11 @@ class TrainingData:
     n_free: int
 
 
+def _far(size: float) -> InputError:
+    return InputError(f"a point lies farther than {float(_OFF) * size:g} m from the world origin "
+                      f"for a grid of {size} m; check the units and poses of the scan.")
+
+
 def leaf_keys(points: np.ndarray, size: float) -> np.ndarray:
     """Pack the leaf index ``floor(x / size)`` of each point into one int64 key (lexicographic order).
 
@@ -59,8 +64,7 @@ def leaf_keys(points: np.ndarray, size: float) -> np.ndarray:
     """
     cells = np.floor(points / size)
     if cells.size and (cells.min() < -_OFF or cells.max() >= _OFF):  # checked before the int cast
-        raise InputError(f"a point lies farther than {float(_OFF) * size:g} m from the world origin "
-                         f"for a grid of {size} m; check the units and poses of the scan.")
+        raise _far(size)
     idx = cells.astype(np.int64) + _OFF
     return (idx[:, 0] << 42) | (idx[:, 1] << 21) | idx[:, 2]
 
@@ -112,6 +116,22 @@ def downsample(points: np.ndarray, labels: np.ndarray | None, size: float,
     return cen, majority
 
 
+def _check_free_resolution(free_resolution: float) -> None:
+    if free_resolution <= 0:
+        raise InputError(f"free_resolution must be positive; got {free_resolution}.")
+
+
+def _check_free_memory(length: np.ndarray, free_resolution: float) -> None:
+    """Refuse, before allocating, free samples of rays of ``length`` [m] beyond MAX_FREE_BYTES."""
+    with np.errstate(over="ignore"):
+        total = float(np.sum(length / free_resolution)) + 2.0 * len(length)
+    if total * BYTES_PER_FREE_SAMPLE > MAX_FREE_BYTES:
+        raise InputError(f"free_resolution {free_resolution:g} m gives about {total:.3g} free samples "
+                         f"for the {len(length):,} rays of one scan (longest {length.max():.3g} m), "
+                         f"about {total * BYTES_PER_FREE_SAMPLE / 2**30:.3g} GiB: use a larger "
+                         "free_resolution or a max_range.")
+
+
 def free_samples(hits: np.ndarray, origin: np.ndarray, free_resolution: float) -> np.ndarray:
     """Free-space points along the rays from ``origin`` to each hit, plus the origin.
 
@@ -129,17 +149,10 @@ def free_samples(hits: np.ndarray, origin: np.ndarray, free_resolution: float) -
     -------
     (M, 3) float array [m], world frame (not downsampled; rays in input order, origin first)
     """
-    if free_resolution <= 0:
-        raise InputError(f"free_resolution must be positive; got {free_resolution}.")
+    _check_free_resolution(free_resolution)
     diff = hits - origin
     length = np.linalg.norm(diff, axis=1)
-    with np.errstate(over="ignore"):
-        total = float(np.sum(length / free_resolution)) + 2.0 * len(hits)  # refuse before allocating
-    if total * BYTES_PER_FREE_SAMPLE > MAX_FREE_BYTES:
-        raise InputError(f"free_resolution {free_resolution:g} m gives about {total:.3g} free samples "
-                         f"for the {len(hits):,} rays of one scan (longest {length.max():.3g} m), "
-                         f"about {total * BYTES_PER_FREE_SAMPLE / 2**30:.3g} GiB: use a larger "
-                         "free_resolution or a max_range.")
+    _check_free_memory(length, free_resolution)
     # number of j >= 1 with j * fr < L (guarded against rounding of L / fr)
     n = np.maximum(np.ceil(length / free_resolution).astype(np.int64) - 1, 0)
     n = np.where((n > 0) & (n * free_resolution >= length), n - 1, n)
@@ -168,7 +181,7 @@ def free_samples(hits: np.ndarray, origin: np.ndarray, free_resolution: float) -
 
 
 def training_data(scan: Scan, ds_resolution: float, free_resolution: float, max_range: float,
-                  num_class: int) -> TrainingData:
+                  num_class: int, engine: str = "compiled") -> TrainingData:
     """Build the training points of one validated scan (see the module docstring).
 
     Parameters
@@ -183,7 +196,14 @@ def training_data(scan: Scan, ds_resolution: float, free_resolution: float, max_
         Hits (after downsampling) farther than this from the origin are dropped; ``<= 0`` keeps all.
     num_class : int
         Number of classes including free (0).
+    engine : {"compiled", "numpy"}
+        ``"compiled"`` (:mod:`hw4.bki.compiled`, numba) or the numpy functions of this module:
+        the same points bit for bit.
     """
+    if engine == "compiled" and ds_resolution > 0:
+        return _training_compiled(scan, ds_resolution, free_resolution, max_range, num_class)
+    if engine not in ("compiled", "numpy"):
+        raise InputError(f"unknown engine {engine!r}; use compiled or numpy.")
     hits, lab = downsample(scan.points, scan.labels, ds_resolution, num_class)
     if max_range > 0:
         keep = np.linalg.norm(hits - scan.origin, axis=1) <= max_range
@@ -191,6 +211,32 @@ def training_data(scan: Scan, ds_resolution: float, free_resolution: float, max_
     if len(hits) == 0:
         return TrainingData(np.zeros((0, 3)), np.zeros(0, dtype=np.int64), 0, 0)
     free, _ = downsample(free_samples(hits, scan.origin, free_resolution), None, ds_resolution)
+    pts = np.vstack([hits, free])
+    labels = np.concatenate([lab, np.zeros(len(free), dtype=np.int64)])
+    return TrainingData(pts, labels, len(hits), len(free))
+
+
+def _training_compiled(scan: Scan, ds_resolution: float, free_resolution: float, max_range: float,
+                       num_class: int) -> TrainingData:
+    """:func:`training_data` by :mod:`hw4.bki.compiled` (``ds_resolution > 0``), step by step."""
+    from . import compiled
+    hits, lab, far = compiled.downsample(scan.points, scan.labels, ds_resolution, num_class)
+    if far:
+        raise _far(ds_resolution)
+    origin = np.asarray(scan.origin, dtype=np.float64)
+    if max_range > 0:
+        keep = compiled.lengths(hits, origin) <= max_range
+        if not keep.all():
+            hits, lab = hits[keep], lab[keep]
+    if len(hits) == 0:
+        return TrainingData(np.zeros((0, 3)), np.zeros(0, dtype=np.int64), 0, 0)
+    _check_free_resolution(free_resolution)
+    length = compiled.lengths(hits, origin)
+    _check_free_memory(length, free_resolution)
+    free, _, far = compiled.downsample(compiled.free_samples(hits, origin, length, free_resolution),
+                                       None, ds_resolution)
+    if far:
+        raise _far(ds_resolution)
     pts = np.vstack([hits, free])
     labels = np.concatenate([lab, np.zeros(len(free), dtype=np.int64)])
     return TrainingData(pts, labels, len(hits), len(free))

@@ -17,9 +17,10 @@ the keys of the blocks seen so far maps each block to a row of a table that hold
 block, the slot of its evidence in a pool with one row per voxel with evidence (``-1``: none yet).
 Table and pool grow (by half their size at a time) with the observed volume, never with a bounding
 box, and empty voxels cost 4 bytes. A scan's S-BKI sums over all its (training point, voxel) pairs
-run compiled (:mod:`hw4.bki.kernel_sums`: one thread, points in raveled voxel order, per point the
-offsets in lexicographic order), so the map is deterministic; S-CSM counts and the merge of a
-scan's sums into the map are vectorised numpy.
+run in one order (points in raveled voxel order, per point the offsets in lexicographic order),
+so the map is deterministic. Two engines give the same map bit for bit: ``"compiled"`` (the
+default; :mod:`hw4.bki.compiled`, numba, one thread) and ``"numpy"``, the readable vectorised
+reference (:mod:`hw4.bki.kernel_sums` and the S-CSM counts and merge below), which needs no numba.
 """
 from __future__ import annotations
 
@@ -30,11 +31,9 @@ import numpy as np
 from ..core.errors import InputError
 
 
-def kernel_sums(*args, **kwargs):
-    """:func:`hw4.bki.kernel_sums.kernel_sums`, imported on first use: numba takes about a second
-    to import, which commands that never map in 3D (``python -m hw4 grade``, ``run``) skip."""
-    from .kernel_sums import kernel_sums as compiled
-    return compiled(*args, **kwargs)
+from .kernel_sums import kernel_sums
+
+ENGINES = ("compiled", "numpy")
 
 B = 4                    # block edge [voxels]
 B3 = B ** 3
@@ -136,12 +135,18 @@ class VoxelMap:
         Prior concentration per class.
     var_thresh : float
         Voxels whose most-likely-class variance exceeds this are unknown.
+    engine : {"compiled", "numpy"}
+        How a scan's evidence is summed and merged (the same map either way; see the module).
     """
 
     def __init__(self, resolution: float, num_class: int, method: str = "sbki", sf2: float = 10.0,
-                 ell: float = 0.3, prior: float = 0.001, var_thresh: float = 0.09):
+                 ell: float = 0.3, prior: float = 0.001, var_thresh: float = 0.09,
+                 engine: str = "compiled"):
         if method not in METHODS:
             raise InputError(f"unknown method {method!r}; use one of {', '.join(METHODS)}.")
+        if engine not in ENGINES:
+            raise InputError(f"unknown engine {engine!r}; use one of {', '.join(ENGINES)}.")
+        self.engine = engine
         for nm, v in (("resolution", resolution), ("ell", ell), ("sf2", sf2), ("prior", prior)):
             if not (np.isfinite(v) and v > 0):
                 raise InputError(f"{nm} must be a positive number; got {v}.")
@@ -182,10 +187,15 @@ class VoxelMap:
         self.n_scans += 1
         if len(points) == 0:
             return
-        base = np.floor(points / self.resolution).astype(np.int64)
         R = 0 if self.method == "scsm" else kernel_reach(self.resolution, self.ell)
-        lo = base.min(axis=0) - R   # the scan's scratch box of voxels: origin and shape
-        dims = base.max(axis=0) + R - lo + 1
+        if self.engine == "compiled":
+            from .compiled import bases
+            base, bmin, bmax = bases(np.ascontiguousarray(points), self.resolution)
+        else:
+            base = np.floor(points / self.resolution).astype(np.int64)
+            bmin, bmax = base.min(axis=0), base.max(axis=0)
+        lo = bmin - R   # the scan's scratch box of voxels: origin and shape
+        dims = bmax + R - lo + 1
         _pack(np.array([lo >> _SHIFT, (lo + dims - 1) >> _SHIFT]))  # range check of the block keys
         if int(np.prod(dims.astype(np.int64))) > _MAX_BOX:  # very spread out: split along x, recurse
             order = np.argsort(base[:, 0], kind="stable")
@@ -196,7 +206,9 @@ class VoxelMap:
             self.update(points[order[:half]], labels[order[:half]])
             self.update(points[order[half:]], labels[order[half:]])
             return
-        if self.method == "scsm":
+        if self.engine == "compiled":
+            self._update_compiled(points, labels, base, lo, dims, R)
+        elif self.method == "scsm":
             stride = np.array([dims[1] * dims[2], dims[2], 1], np.int64)
             shift = max(1, int(np.prod(dims.astype(np.int64))) - 1).bit_length()
             vt, add, cnt = self._count((labels << shift) + (base - lo) @ stride, shift, dims)
@@ -205,7 +217,38 @@ class VoxelMap:
             order = np.argsort((base - lo) @ np.array([dims[1] * dims[2], dims[2], 1]), kind="stable")
             vt, add, cnt = kernel_sums(points[order], labels[order], base[order], lo, dims, R,
                                        self.resolution, self.ell, self.sf2, self.num_class)
-        self._merge(vt, add, cnt, lo, dims)
+        if self.engine == "numpy":
+            self._merge(vt, add, cnt, lo, dims)
+
+    def _update_compiled(self, points, labels, base, lo, dims, R) -> None:
+        """The compiled engine: the scan's sparse evidence, then its merge into the pool."""
+        from .compiled import _apply, _count_new, scan_evidence
+        blk, vloc, vcnt, c0, w0, more, ecls, evalue, enext = scan_evidence(
+            np.ascontiguousarray(points), np.ascontiguousarray(labels), base, lo, dims, R,
+            self.resolution, self.ell, self.sf2, self.method == "scsm")
+        blo = lo >> _SHIFT
+        bdims = tuple(int(x) for x in ((lo + dims - 1) >> _SHIFT) - blo + 1)
+        ub = np.flatnonzero(blk >= 0)                  # touched blocks in key order
+        lbs = blk[ub]
+        rows = self._rows_for(_pack(np.column_stack(np.unravel_index(ub, bdims)) + blo))
+        n_new = _count_new(self.table, rows, lbs, vloc)
+        self._reserve(n_new)
+        self.n_voxels = _apply(self.table, rows, lbs, vloc, vcnt, c0, w0, more, ecls, evalue,
+                               enext, self.ev, self.count, self.n_voxels)
+
+    def _reserve(self, n_new: int) -> None:
+        """Room in the pool for ``n_new`` more voxels (grown by half its size at a time)."""
+        need = self.n_voxels + n_new
+        if need >= np.iinfo(np.int32).max:
+            raise InputError("the voxel map would exceed 2^31 voxels; use a coarser resolution.")
+        if need > len(self.count):
+            first = self.n_voxels
+            cap = max(need, len(self.count) + len(self.count) // 2)
+            ev = np.zeros((cap, self.num_class))
+            ev[:first] = self.ev[:first]
+            count = np.zeros(cap, np.int64)
+            count[:first] = self.count[:first]
+            self.ev, self.count = ev, count
 
     def _count(self, key, shift, dims):
         """S-CSM: the number of training points per touched voxel and class.
@@ -255,18 +298,9 @@ class VoxelMap:
         if n_new:
             first = self.n_voxels
             slots[new] = np.arange(first, first + n_new)
-            need = first + n_new
-            if need >= np.iinfo(np.int32).max:
-                raise InputError("the voxel map would exceed 2^31 voxels; use a coarser resolution.")
-            if need > len(self.count):
-                cap = max(need, len(self.count) + len(self.count) // 2)
-                ev = np.zeros((cap, K))
-                ev[:first] = self.ev[:first]
-                count = np.zeros(cap, np.int64)
-                count[:first] = self.count[:first]
-                self.ev, self.count = ev, count
+            self._reserve(n_new)
             self.table[rows[new], local[new]] = slots[new]
-            self.n_voxels = need
+            self.n_voxels = first + n_new
         self.ev[slots] += add
         self.count[slots] += cnt
 

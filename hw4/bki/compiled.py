@@ -1,0 +1,437 @@
+"""The S-BKI / S-CSM insertion of one scan compiled (numba): training data and map update.
+
+:mod:`hw4.bki.training` (``downsample``, ``free_samples``) and the ``engine="numpy"`` update of
+:class:`hw4.bki.voxelmap.VoxelMap` keep the readable numpy formulation as the reference; this
+module repeats every arithmetic step of it in loops, so the training points and the map are the
+same bit for bit (the tests compare the two engines):
+
+* **Downsampling** (:func:`downsample`): the leaf ``floor(x / size)`` of every point, a stable
+  sort of the leaves (keys relative to the scan's box of leaves, lexicographic in x, y, z),
+  then per leaf the sum of its points in input order divided by their number (what ``bincount``
+  does) and the majority label, ties to the smallest.
+* **Free samples** (:func:`free_samples`): per ray the numpy formulas, element by element
+  (``origin + (diff / L) * dist``, ``L = sqrt((dx^2 + dy^2) + dz^2)`` as ``np.linalg.norm``).
+* **Evidence of a scan** (:func:`scan_evidence`): the training points in raveled voxel order
+  (stable), per point the voxel offsets in lexicographic order, each pair's kernel weight from the
+  table of :func:`hw4.core.kernel.sparse_kernel_pieces` (as :mod:`hw4.bki.kernel_sums`); per
+  (voxel, class) the weights are summed from 0 in that order into a sparse per-scan list (only
+  the classes that occur), which :func:`merge` then adds to the map's evidence. Adding a scan's
+  sum first and the map's value after is the order of the numpy engine (``ev[slot] += add``).
+
+New voxels take pool slots in (block key, voxel in block) order here (the numpy engine: raveled
+voxel order of the scan's box); the pool's row order is internal, :meth:`VoxelMap.evidence` and
+:meth:`VoxelMap.view` are the same. One thread: the sums have one order, so the map is the same
+on any number of threads. Units: metres, world frame; voxel ``i = floor(x / r)``, centre
+``(i + 0.5) r``.
+"""
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+from ..core.kernel import _PIECES, _pieces
+
+_OFF = 1 << 20   # leaf / block index offset of the packed keys (as training.py, voxelmap.py)
+
+
+@njit(cache=True, nogil=True)
+def _leaf_keys(points, size):  # pragma: no cover - compiled
+    """Per point a key of its leaf ``floor(x / size)``, lexicographic in (x, y, z) (relative to the
+    scan's box of leaves, or the packed key of training.py when that box is too large), and the
+    largest key possible. ``far`` when a leaf index lies outside +-2^20 (keys then unset)."""
+    n = points.shape[0]
+    cells = np.empty((n, 3), np.int64)
+    lo = np.full(3, np.iinfo(np.int64).max)
+    hi = np.full(3, np.iinfo(np.int64).min)
+    keys = np.empty(n, np.int64)
+    for i in range(n):
+        for a in range(3):
+            c = np.floor(points[i, a] / size)
+            if c < -_OFF or c >= _OFF:
+                return keys, 0, True
+            v = np.int64(c)
+            cells[i, a] = v
+            if v < lo[a]:
+                lo[a] = v
+            if v > hi[a]:
+                hi[a] = v
+    if n == 0:
+        return keys, 0, False
+    ny = hi[1] - lo[1] + 1
+    nz = hi[2] - lo[2] + 1
+    if float(hi[0] - lo[0] + 1) * ny * nz < 2.0 ** 62:
+        for i in range(n):
+            keys[i] = ((cells[i, 0] - lo[0]) * ny + (cells[i, 1] - lo[1])) * nz + (cells[i, 2] - lo[2])
+        return keys, (hi[0] - lo[0] + 1) * ny * nz - 1, False
+    for i in range(n):
+        keys[i] = ((cells[i, 0] + _OFF) << 42) | ((cells[i, 1] + _OFF) << 21) | (cells[i, 2] + _OFF)
+    return keys, (1 << 63) - 1, False
+
+
+@njit(cache=True, nogil=True)
+def _group(points, labels, order, skeys, num_labels):  # pragma: no cover - compiled
+    """Centroid and majority label (``labels`` empty: none) of each run of equal sorted keys
+    ``skeys`` (the points in ``order``, ascending and stable): the points of a leaf summed from 0 in input order and divided
+    by their number, as ``bincount``; the majority's ties to the smallest label."""
+    n = points.shape[0]
+    m = 0
+    for t in range(n):
+        if t == 0 or skeys[t] != skeys[t - 1]:
+            m += 1
+    cen = np.empty((m, 3))
+    has = labels.shape[0] > 0
+    maj = np.empty(m if has else 0, np.int64)
+    votes = np.zeros(max(num_labels, 1), np.int64)
+    g = 0
+    i = 0
+    while i < n:
+        kk = skeys[i]
+        j = i + 1
+        while j < n and skeys[j] == kk:
+            j += 1
+        sx = 0.0
+        sy = 0.0
+        sz = 0.0
+        best = -1
+        bestc = 0
+        for t in range(i, j):
+            q = order[t]
+            sx += points[q, 0]
+            sy += points[q, 1]
+            sz += points[q, 2]
+            if has:
+                lab = labels[q]
+                v = votes[lab] + 1
+                votes[lab] = v
+                if v > bestc or (v == bestc and lab < best):
+                    best = lab
+                    bestc = v
+        c = np.float64(j - i)
+        cen[g, 0] = sx / c
+        cen[g, 1] = sy / c
+        cen[g, 2] = sz / c
+        if has:
+            for t in range(i, j):
+                votes[labels[order[t]]] = 0
+            maj[g] = best
+        g += 1
+        i = j
+    return cen, maj
+
+
+@njit(cache=True, nogil=True)
+def _lengths(points, origin):  # pragma: no cover - compiled
+    """|p - origin| per point, as ``np.linalg.norm(points - origin, axis=1)`` rounds it."""
+    n = points.shape[0]
+    out = np.empty(n)
+    for i in range(n):
+        dx = points[i, 0] - origin[0]
+        dy = points[i, 1] - origin[1]
+        dz = points[i, 2] - origin[2]
+        out[i] = np.sqrt((dx * dx + dy * dy) + dz * dz)
+    return out
+
+
+@njit(cache=True, nogil=True)
+def _free_samples(hits, origin, length, fr):  # pragma: no cover - compiled
+    """The free samples of :func:`hw4.bki.training.free_samples`, ray by ray."""
+    n = hits.shape[0]
+    cnt = np.empty(n, np.int64)
+    total = 0
+    for i in range(n):
+        L = length[i]
+        k = np.int64(np.ceil(L / fr)) - 1
+        if k < 0:
+            k = 0
+        if k > 0 and k * fr >= L:
+            k -= 1
+        if (k + 1) * fr < L:
+            k += 1
+        cnt[i] = k
+        total += 1 + k + (1 if L > fr else 0)
+    out = np.empty((total, 3))
+    p = 0
+    for i in range(n):
+        L = length[i]
+        k = cnt[i]
+        out[p, 0] = origin[0]
+        out[p, 1] = origin[1]
+        out[p, 2] = origin[2]
+        p += 1
+        last = k + (1 if L > fr else 0)
+        if last == 0:
+            continue
+        ux = (hits[i, 0] - origin[0]) / L
+        uy = (hits[i, 1] - origin[1]) / L
+        uz = (hits[i, 2] - origin[2]) / L
+        for pos in range(1, last + 1):
+            dist = pos * fr if pos <= k else L - fr
+            out[p, 0] = origin[0] + ux * dist
+            out[p, 1] = origin[1] + uy * dist
+            out[p, 2] = origin[2] + uz * dist
+            p += 1
+    return out
+
+
+@njit(cache=True, nogil=True)
+def _bases(points, res):  # pragma: no cover - compiled
+    """``floor(points / res)`` as int64 and its per-axis minimum and maximum."""
+    n = points.shape[0]
+    base = np.empty((n, 3), np.int64)
+    lo = np.full(3, np.iinfo(np.int64).max)
+    hi = np.full(3, np.iinfo(np.int64).min)
+    for i in range(n):
+        for a in range(3):
+            v = np.int64(np.floor(points[i, a] / res))
+            base[i, a] = v
+            if v < lo[a]:
+                lo[a] = v
+            if v > hi[a]:
+                hi[a] = v
+    return base, lo, hi
+
+
+@njit(cache=True, nogil=True)
+def _codes(base, lo, dims):  # pragma: no cover - compiled
+    """Raveled index of each point's voxel in the scan's box (origin ``lo``, shape ``dims``)."""
+    n = base.shape[0]
+    s1 = dims[1] * dims[2]
+    codes = np.empty(n, np.int64)
+    for i in range(n):
+        codes[i] = (base[i, 0] - lo[0]) * s1 + (base[i, 1] - lo[1]) * dims[2] + (base[i, 2] - lo[2])
+    return codes
+
+
+@njit(cache=True, nogil=True)
+def _scan_evidence(points, labels, base, order, codes, lo, dims, R, res, ell2, scale, sf2, table,
+                   counting):  # pragma: no cover - compiled
+    """Per-scan evidence in a sparse form. The points are visited in ``order`` (raveled voxel
+    order, stable), per point the offsets in lexicographic order; ``counting`` (S-CSM): every
+    point adds 1 to its own voxel (``R`` = 0), else the kernel weight to every voxel within ell.
+
+    Returns ``blk`` (per block of the scan's box of 4^3-voxel blocks: its local block, -1 if not
+    touched), ``vloc`` (per local block and voxel in it: the local voxel, -1 if not touched) and
+    per local voxel its pair count ``vcnt``, first class ``c0`` and its summed weight ``w0`` and
+    the head ``more`` of a list of further (class ``ecls``, sum ``evalue``, next ``enext``)."""
+    n = points.shape[0]
+    blo0, blo1, blo2 = lo[0] >> 2, lo[1] >> 2, lo[2] >> 2
+    bd0 = ((lo[0] + dims[0] - 1) >> 2) - blo0 + 1
+    bd1 = ((lo[1] + dims[1] - 1) >> 2) - blo1 + 1
+    bd2 = ((lo[2] + dims[2] - 1) >> 2) - blo2 + 1
+    blk = np.full(bd0 * bd1 * bd2, -1, np.int32)
+    w = 2 * R + 1
+    cap = min(n * w * w * w, dims[0] * dims[1] * dims[2])   # bound on the voxels touched
+    vloc = np.empty(min(cap, bd0 * bd1 * bd2) * 64, np.int32)
+    vcnt = np.empty(cap, np.int64)
+    c0 = np.empty(cap, np.int32)
+    w0 = np.empty(cap)
+    more = np.empty(cap, np.int32)
+    ecap = 1024
+    ecls = np.empty(ecap, np.int32)
+    evalue = np.empty(ecap)
+    enext = np.empty(ecap, np.int32)
+    near = np.full(w * w * w, -1, np.int32)   # local voxels around the current point's voxel
+    nb = 0
+    nv = 0
+    ne = 0
+    top = table.shape[0] - 1
+    deg = table.shape[1] - 1
+    last = -1
+    for t in range(n):
+        i = order[t]
+        if codes[i] != last:   # a new voxel of points: its neighbours not looked up yet
+            last = codes[i]
+            near[:] = -1
+        px, py, pz = points[i, 0], points[i, 1], points[i, 2]
+        bx, by, bz = base[i, 0], base[i, 1], base[i, 2]
+        c = labels[i]
+        o = -1
+        for ox in range(-R, R + 1):
+            dx = px - (bx + (ox + 0.5)) * res
+            sx = dx * dx
+            if not counting and sx >= ell2:
+                o += w * w
+                continue
+            for oy in range(-R, R + 1):
+                dy = py - (by + (oy + 0.5)) * res
+                sxy = sx + dy * dy
+                if not counting and sxy >= ell2:
+                    o += w
+                    continue
+                for oz in range(-R, R + 1):
+                    o += 1
+                    if counting:
+                        k = 1.0
+                    else:
+                        dz = pz - (bz + (oz + 0.5)) * res
+                        d2 = sxy + dz * dz
+                        if d2 >= ell2:
+                            continue
+                        # the kernel's piece j and u = x P - j - 1/2, as sparse_kernel_pieces
+                        r = np.sqrt(d2) * scale
+                        j = int(r)
+                        if j > top:
+                            j = top
+                        u = r - j
+                        u -= 0.5
+                        k = table[j, deg] * u
+                        for q in range(deg - 1, 0, -1):
+                            k += table[j, q]
+                            k *= u
+                        k += table[j, 0]
+                        k *= sf2
+                        if k < 0.0:
+                            k = 0.0
+                    v = near[o]
+                    if v < 0:
+                        vx, vy, vz = bx + ox, by + oy, bz + oz
+                        bc = (((vx >> 2) - blo0) * bd1 + ((vy >> 2) - blo1)) * bd2 + ((vz >> 2) - blo2)
+                        lb = blk[bc]
+                        if lb < 0:
+                            lb = nb
+                            blk[bc] = lb
+                            vloc[lb * 64: lb * 64 + 64] = -1
+                            nb += 1
+                        li = lb * 64 + (((vx & 3) << 4) | ((vy & 3) << 2) | (vz & 3))
+                        v = vloc[li]
+                        if v < 0:
+                            v = nv
+                            vloc[li] = v
+                            vcnt[v] = 0
+                            c0[v] = c
+                            w0[v] = 0.0
+                            more[v] = -1
+                            nv += 1
+                        near[o] = v
+                    vcnt[v] += 1
+                    if c0[v] == c:
+                        w0[v] += k
+                        continue
+                    e = more[v]
+                    while e >= 0 and ecls[e] != c:
+                        e = enext[e]
+                    if e < 0:
+                        if ne == ecap:
+                            ecap *= 2
+                            g = np.empty(ecap, np.int32)
+                            g[:ne] = ecls[:ne]
+                            ecls = g
+                            g = np.empty(ecap, np.int32)
+                            g[:ne] = enext[:ne]
+                            enext = g
+                            f = np.empty(ecap)
+                            f[:ne] = evalue[:ne]
+                            evalue = f
+                        e = ne
+                        ecls[e] = c
+                        evalue[e] = 0.0
+                        enext[e] = more[v]
+                        more[v] = e
+                        ne += 1
+                    evalue[e] += k
+    return (blk, vloc[:nb * 64], vcnt[:nv], c0[:nv], w0[:nv], more[:nv], ecls[:ne], evalue[:ne],
+            enext[:ne])
+
+
+@njit(cache=True, nogil=True)
+def _count_new(table, rows, lbs, vloc):  # pragma: no cover - compiled
+    """Touched voxels (local blocks ``lbs`` at map rows ``rows``) that have no pool slot yet."""
+    n = 0
+    for b in range(lbs.shape[0]):
+        row = rows[b]
+        base = lbs[b] * 64
+        for q in range(64):
+            if vloc[base + q] >= 0 and table[row, q] < 0:
+                n += 1
+    return n
+
+
+@njit(cache=True, nogil=True)
+def _apply(table, rows, lbs, vloc, vcnt, c0, w0, more, ecls, evalue, enext, ev, count,
+           n_voxels):  # pragma: no cover - compiled
+    """Add the scan's evidence to the map's pool; new voxels take the next slots in (block key,
+    voxel) order. Returns the new number of voxels."""
+    for b in range(lbs.shape[0]):
+        row = rows[b]
+        base = lbs[b] * 64
+        for q in range(64):
+            v = vloc[base + q]
+            if v < 0:
+                continue
+            s = table[row, q]
+            if s < 0:
+                s = n_voxels
+                table[row, q] = s
+                n_voxels += 1
+            count[s] += vcnt[v]
+            ev[s, c0[v]] += w0[v]
+            e = more[v]
+            while e >= 0:
+                ev[s, ecls[e]] += evalue[e]
+                e = enext[e]
+    return n_voxels
+
+
+# ----------------------------------------------------------------------------- Python side
+
+
+def downsample(points: np.ndarray, labels, size: float, num_labels: int = 0):
+    """Compiled :func:`hw4.bki.training.downsample` for ``size > 0``: ``(centroids, majority or
+    None, far)``; ``far`` when a leaf index lies beyond +-2^20 (the caller raises its error)."""
+    points = np.ascontiguousarray(points, dtype=np.float64)
+    if labels is None:
+        lab, k = np.zeros(0, np.int64), 1
+    else:
+        lab = np.ascontiguousarray(labels, dtype=np.int64)
+        k = int(num_labels) if num_labels else (int(lab.max()) + 1 if len(lab) else 1)
+    keys, top, far = _leaf_keys(points, float(size))
+    if far:
+        return np.zeros((0, 3)), None, True
+    order, skeys = stable_order(keys, top)
+    cen, maj = _group(points, lab, order, skeys, k)
+    return cen, (None if labels is None else maj), False
+
+
+def lengths(points: np.ndarray, origin: np.ndarray) -> np.ndarray:
+    """``np.linalg.norm(points - origin, axis=1)`` [m], the same values."""
+    return _lengths(np.ascontiguousarray(points, dtype=np.float64),
+                    np.ascontiguousarray(origin, dtype=np.float64))
+
+
+def free_samples(hits: np.ndarray, origin: np.ndarray, length: np.ndarray, fr: float) -> np.ndarray:
+    """Compiled :func:`hw4.bki.training.free_samples` (its checks done by the caller)."""
+    return _free_samples(np.ascontiguousarray(hits, dtype=np.float64),
+                         np.ascontiguousarray(origin, dtype=np.float64), length, float(fr))
+
+
+def bases(points: np.ndarray, resolution: float):
+    """``(floor(points / resolution), its minimum, its maximum)`` per axis, int64."""
+    return _bases(points, float(resolution))
+
+
+def stable_order(keys: np.ndarray, top: int):
+    """Stable ascending order of int64 ``keys`` in ``[0, top]`` and the keys in that order: one
+    ``np.sort`` of the keys with the index packed below them when both fit in 63 bits, else a
+    stable argsort."""
+    nb = max(1, int(len(keys) - 1).bit_length())
+    if int(top).bit_length() + nb <= 63:
+        packed = np.sort((keys << nb) | np.arange(len(keys)))
+        return packed & ((1 << nb) - 1), packed >> nb
+    order = np.argsort(keys, kind="stable")
+    return order, keys[order]
+
+
+def scan_evidence(points, labels, base, lo, dims, R: int, resolution: float, ell: float,
+                  sf2: float, counting: bool):
+    """The sparse evidence of one scan's training points (see :func:`_scan_evidence`)."""
+    lo = np.ascontiguousarray(lo, dtype=np.int64)
+    dims = np.ascontiguousarray(dims, dtype=np.int64)
+    codes = _codes(base, lo, dims)
+    order, _ = stable_order(codes, int(np.prod(dims)) - 1)
+    return _scan_evidence(points, labels, base, order, codes, lo, dims, int(R), float(resolution),
+                          float(ell) ** 2, _PIECES / float(ell), float(sf2), _pieces(),
+                          bool(counting))
+
+
+KERNELS = (_leaf_keys, _group, _lengths, _free_samples, _bases, _codes, _scan_evidence,
+           _count_new, _apply)

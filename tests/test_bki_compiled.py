@@ -1,0 +1,193 @@
+"""The compiled S-BKI / S-CSM insertion (hw4.bki.compiled) against the numpy reference, bit for bit.
+
+The numpy formulation (hw4.bki.training's downsample and free_samples, VoxelMap(engine="numpy"))
+is the reference; the compiled engine must give the same training points and the same map (voxels,
+evidence and pair counts) exactly, scan after scan, for both methods and for settings that reach
+1 to 3 voxels per axis, points on leaf and voxel faces, rays of zero length and of exact multiples
+of the free-sample step, and scans so spread out that the update splits them.
+"""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from bki_literal import literal_update
+
+from hw4.bki import Scan, VoxelMap, load_config, scan_source, training_data, validate_scan
+from hw4.bki import compiled
+from hw4.bki.training import downsample, free_samples
+from hw4.core.errors import InputError
+
+
+def _same_map(a: VoxelMap, b: VoxelMap) -> None:
+    va, vb = a.evidence(), b.evidence()
+    assert len(va[0]) == len(vb[0]) > 0
+    for x, y in zip(va, vb):
+        assert x.dtype == y.dtype and np.array_equal(x, y)  # bit for bit (no tolerance)
+    assert a.n_voxels == b.n_voxels and a.n_blocks == b.n_blocks and a.n_scans == b.n_scans
+    np.testing.assert_array_equal(a.keys, b.keys)
+
+
+def _scan(rng, n, K, spread=4.0, origin=(0.3, -0.2, 0.5)):
+    pts = rng.normal(0, spread, (n, 3))
+    pts[: n // 3] = np.round(pts[: n // 3], 1)          # on leaf and voxel faces (0.1 m grid)
+    pts[n // 3: n // 2] = np.round(pts[n // 3: n // 2] / 0.3) * 0.3
+    pts[-3:] = origin                                  # rays of length 0
+    return Scan(pts, rng.integers(1, K, n), np.array(origin), "random")
+
+
+@pytest.mark.parametrize("num_labels", [2, 4, 20])
+@pytest.mark.parametrize("labelled", [True, False])
+def test_downsample_equals_numpy(num_labels, labelled):
+    rng = np.random.default_rng(num_labels)
+    pts = rng.normal(0, 0.5, (20000, 3))
+    pts[:5000] = np.round(pts[:5000], 1)
+    pts[5000:6000] = pts[0]                            # many points in one leaf
+    lab = rng.integers(0, num_labels, len(pts)) if labelled else None
+    want = downsample(pts, lab, 0.1, num_labels if labelled else None)
+    got = compiled.downsample(pts, lab, 0.1, num_labels if labelled else 0)
+    assert not got[2]
+    assert np.array_equal(got[0], want[0])
+    if labelled:
+        assert np.array_equal(got[1], want[1])
+    else:
+        assert got[1] is None
+
+
+def test_downsample_ties_go_to_the_smallest_label():
+    pts = np.zeros((6, 3)) + 0.05
+    lab = np.array([3, 2, 3, 2, 1, 1])                 # a three-way tie, 2 votes each
+    cen, maj, _ = compiled.downsample(pts, lab, 0.1, 4)
+    assert maj.tolist() == [1] and np.array_equal(cen, downsample(pts, lab, 0.1, 4)[0])
+
+
+def test_free_samples_equal_numpy():
+    rng = np.random.default_rng(3)
+    o = np.array([0.25, -1.0, 0.7])
+    hits = o + rng.normal(0, 5, (3000, 3))
+    hits[:10] = o                                      # L = 0
+    hits[10:20] = o + np.array([1.0, 0, 0]) * np.arange(1, 11)[:, None] * 0.5  # L = j * step
+    hits[20:30] = o + rng.normal(0, 0.2, (10, 3))      # L below the step
+    for step in (0.5, 0.1, 100.0):
+        want = free_samples(hits, o, step)
+        got = compiled.free_samples(hits, o, compiled.lengths(hits, o), step)
+        assert np.array_equal(got, want)
+    assert np.array_equal(compiled.lengths(hits, o), np.linalg.norm(hits - o, axis=1))
+
+
+@pytest.mark.parametrize("ds, fr, max_range", [(0.1, 0.5, 8.0), (0.1, 100.0, -1.0),
+                                                (0.25, 0.3, 6.0), (0.05, 1.0, 0.0)])
+def test_training_data_equals_numpy(ds, fr, max_range):
+    rng = np.random.default_rng(int(ds * 100 + fr))
+    for _ in range(3):
+        s = validate_scan(_scan(rng, 4000, 5), 5)
+        a = training_data(s, ds, fr, max_range, 5, engine="numpy")
+        b = training_data(s, ds, fr, max_range, 5, engine="compiled")
+        assert (a.n_hits, a.n_free) == (b.n_hits, b.n_free)
+        assert np.array_equal(a.points, b.points) and np.array_equal(a.labels, b.labels)
+        assert a.labels.dtype == b.labels.dtype and a.points.dtype == b.points.dtype
+
+
+def test_training_data_of_the_toy_scans_equals_numpy():
+    cfg = load_config("toy")
+    for load in list(scan_source("toy"))[:4]:
+        s = validate_scan(load(), cfg.num_class)
+        args = (s, cfg.ds_resolution, cfg.free_resolution, cfg.max_range, cfg.num_class)
+        a, b = training_data(*args, engine="numpy"), training_data(*args, engine="compiled")
+        assert np.array_equal(a.points, b.points) and np.array_equal(a.labels, b.labels)
+
+
+def test_far_points_and_free_resolution_give_the_same_errors():
+    far = Scan(np.array([[1e6, 0.0, 0.0], [0.0, 0.0, 0.0]]), np.array([1, 1]), np.zeros(3))
+    msgs = []
+    for engine in ("numpy", "compiled"):
+        with pytest.raises(InputError) as e:
+            training_data(far, 0.1, 0.5, -1, 2, engine=engine)
+        msgs.append(str(e.value))
+    assert msgs[0] == msgs[1] and "farther than" in msgs[0]
+    near = Scan(np.array([[1.0, 0.0, 0.0]]), np.array([1]), np.zeros(3))
+    for engine in ("numpy", "compiled"):
+        with pytest.raises(InputError, match="free_resolution must be positive"):
+            training_data(near, 0.1, 0.0, -1, 2, engine=engine)
+    with pytest.raises(InputError, match="unknown engine"):
+        training_data(near, 0.1, 0.5, -1, 2, engine="fortran")
+    with pytest.raises(InputError, match="unknown engine"):
+        VoxelMap(0.1, 2, engine="fortran")
+
+
+@pytest.mark.parametrize("method", ["sbki", "scsm"])
+@pytest.mark.parametrize("res, ell, K", [(0.3, 0.3, 20), (0.1, 0.3, 4), (0.2, 0.5, 3),
+                                         (0.25, 0.1, 2), (0.15, 0.3, 7)])
+def test_update_equals_numpy_scan_after_scan(method, res, ell, K):
+    rng = np.random.default_rng(int(res * 1000 + K))
+    a = VoxelMap(res, K, method, 10.0, ell, engine="numpy")
+    b = VoxelMap(res, K, method, 10.0, ell, engine="compiled")
+    for n in (3000, 1, 2500, 4000):                   # incrementally, one lone point among them
+        pts = rng.normal(0, 1.5, (n, 3))
+        pts[: n // 3] = np.round(pts[: n // 3] / res) * res   # on voxel faces
+        lab = rng.integers(0, K, n)
+        a.update(pts, lab)
+        b.update(pts, lab)
+        _same_map(a, b)
+    va, vb = a.view(), b.view()
+    for x, y in ((va.probs, vb.probs), (va.variance, vb.variance), (va.state, vb.state)):
+        assert np.array_equal(x, y)
+
+
+@pytest.mark.parametrize("method", ["sbki", "scsm"])
+def test_update_equals_the_loop_transcription(method):
+    K, res = 3, 0.1
+    vmap = VoxelMap(res, K, method, 10.0, 0.3, engine="compiled")
+    ev, cnt = {}, {}
+    rng = np.random.default_rng(11)
+    for n in (200, 150):
+        pts, lab = rng.uniform(-1, 1, (n, 3)), rng.integers(0, K, n)
+        vmap.update(pts, lab)
+        literal_update(ev, cnt, pts, lab, res, K, method, 10.0, 0.3)
+    vox, e, count = vmap.evidence()
+    got = {tuple(v): (row, c) for v, row, c in zip(vox.tolist(), e, count)}
+    assert set(got) == set(ev)
+    assert max(np.abs(got[k][0] - np.array(ev[k])).max() for k in ev) < 1e-9
+    assert all(got[k][1] == cnt[k] for k in ev)
+
+
+def test_update_of_a_scan_split_for_its_box_equals_numpy():
+    # two clusters 400 m apart in x and y: the scan's box of voxels exceeds _MAX_BOX, so the
+    # update splits the points (in x order) and inserts the halves one after the other
+    rng = np.random.default_rng(2)
+    pts = np.vstack([rng.normal(0, 0.3, (500, 3)), rng.normal(400, 0.3, (500, 3))])
+    lab = rng.integers(0, 3, len(pts))
+    a = VoxelMap(0.1, 3, "sbki", engine="numpy")
+    b = VoxelMap(0.1, 3, "sbki", engine="compiled")
+    a.update(pts, lab)
+    b.update(pts, lab)
+    _same_map(a, b)
+    assert b.n_scans == 1
+
+
+def test_kitti_scans_give_the_same_map_on_both_engines():
+    """Three scans of SemanticKITTI sequence 04 (0.3 m voxels, 20 classes): training points and
+    maps of both methods identical."""
+    cfg = load_config("semantickitti")
+    loaders = list(scan_source("semantickitti", None, cfg))[:3]
+    for method in ("sbki", "scsm"):
+        maps = {e: VoxelMap(cfg.resolution, cfg.num_class, method, cfg.sf2, cfg.ell, cfg.prior,
+                            cfg.var_thresh, engine=e) for e in ("numpy", "compiled")}
+        for load in loaders:
+            s = validate_scan(load(), cfg.num_class)
+            tds = {e: training_data(s, cfg.ds_resolution, cfg.free_resolution, cfg.max_range,
+                                    cfg.num_class, engine=e) for e in maps}
+            assert np.array_equal(tds["numpy"].points, tds["compiled"].points)
+            assert np.array_equal(tds["numpy"].labels, tds["compiled"].labels)
+            for e, m in maps.items():
+                m.update(tds[e].points, tds[e].labels)
+            _same_map(maps["numpy"], maps["compiled"])
+
+
+def test_stable_order_is_a_stable_argsort():
+    rng = np.random.default_rng(0)
+    keys = rng.integers(0, 50, 10000)
+    order, sk = compiled.stable_order(keys, 49)
+    assert np.array_equal(order, np.argsort(keys, kind="stable")) and np.array_equal(sk, keys[order])
+    big = rng.integers(0, 1 << 60, 1000)               # too wide to pack with the index
+    order, sk = compiled.stable_order(big, (1 << 60) - 1)
+    assert np.array_equal(order, np.argsort(big, kind="stable"))
