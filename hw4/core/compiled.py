@@ -6,12 +6,16 @@ the numpy formulation's floating-point steps in the same order, per pair, so tha
 the same pairs, the same nearest beam and the same sums:
 
 * :func:`nearest_poses` is the exact k-nearest-pose query (squared distances ``dx dx + dy dy``
-  as scipy's KD-tree computes them, sorted by distance) on a bucket grid of the poses; cells whose
-  ranking has a tie (two poses at the same distance) are flagged and answered by scipy's KD-tree
-  itself, so the poses and their order are always the KD-tree's.
+  as scipy's KD-tree computes them, sorted by distance) over tiles of cells sharing one sorted
+  candidate list; cells whose ranking has a tie (two poses at the same distance) are flagged and
+  answered by scipy's KD-tree itself, so the poses and their order are always the KD-tree's.
+* :func:`bin_table` builds the per-pose bin table of :class:`hw4.core.sensor.BeamTable` in one
+  pass (the same arrays as its numpy form).
 * :func:`cell_evidence` visits, cell by cell, its poses in the KD-tree's order: range, wrapped
   bearing (``np.remainder`` as numpy computes it), the perceptual field, the nearest beam from
-  the same sorted bearing index (:class:`hw4.core.sensor.BeamTable`), then Algorithm 1 or 2.
+  the same sorted bearing index (:class:`hw4.core.sensor.BeamTable`; the beams' ranges, classes
+  and directions are read in that index's order, at the beam's sorted position), then
+  Algorithm 1 or 2.
   Sums per cell are formed in the numpy path's order (end points per class over the cell's
   poses, then the free samples offset by offset), so the map does not depend on how cells are
   split among threads.
@@ -35,7 +39,6 @@ import numpy as np
 from numba import njit
 
 TWO_PI = 2.0 * np.pi
-KNN_BUCKETS = 0.5  # buckets per pose of the nearest-pose grid (per axis: sqrt(n * this))
 PI = np.pi
 
 
@@ -72,9 +75,10 @@ def _kernel(d, a, b, c3, inv2pi, sigma0):  # pragma: no cover - compiled
 
 
 @njit(cache=True, nogil=True)
-def _nearest(pose, phi, bearings, srt, key, seg_start, seg_len, bin_lo, dense, sbearing, bin_scale,
+def _nearest(pose, phi, srt, key, seg_start, seg_len, bin_lo, dense, sbearing, bin_scale,
              bins):  # pragma: no cover - compiled
-    """``BeamTable._nearest`` for one (pose, bearing): the beam index and |wrapped difference|."""
+    """``BeamTable._nearest`` for one (pose, bearing): the nearest beam's position in the sorted
+    tables (``srt[position]`` is its index) and |wrapped difference|."""
     start = seg_start[pose]
     n = seg_len[pose]
     if dense[pose]:
@@ -109,10 +113,9 @@ def _nearest(pose, phi, bearings, srt, key, seg_start, seg_len, bin_lo, dense, s
             i += n
         while i >= n:
             i -= n
-        cand = srt[start + i]
-        d = abs(_wrap(bearings[cand] - phi))
-        if best < 0 or d < best_d or (d == best_d and cand < best):
-            best = cand
+        d = abs(_wrap(sbearing[start + i] - phi))  # sbearing[p] is bearings[srt[p]]
+        if best < 0 or d < best_d or (d == best_d and srt[start + i] < srt[best]):
+            best = start + i
             best_d = d
     return best, best_d
 
@@ -160,11 +163,11 @@ def _atan2_fast(y, x):  # pragma: no cover - compiled
 
 
 @njit(cache=True, nogil=True, inline="always")
-def _nearest_fast(pose, phi, bearings, srt, seg_start, seg_len, bin_lo, sbearing, bin_scale,
+def _nearest_fast(pose, phi, srt, seg_start, seg_len, bin_lo, sbearing, bin_scale,
                   bins):  # pragma: no cover - compiled
-    """``_nearest`` (bin-table poses) for a bearing ``phi`` known within EPS: the beam, its
-    |difference| and whether both are certain (no bearing within EPS of phi, and the two
-    neighbours' differences apart by more than 2 EPS)."""
+    """``_nearest`` (bin-table poses) for a bearing ``phi`` known within EPS: the beam's sorted
+    position, its |difference| and whether both are certain (no bearing within EPS of phi, and
+    the two neighbours' differences apart by more than 2 EPS)."""
     start = seg_start[pose]
     n = seg_len[pose]
     b = math.floor((phi + PI) * bin_scale)
@@ -186,15 +189,15 @@ def _nearest_fast(pose, phi, bearings, srt, seg_start, seg_len, bin_lo, sbearing
     i1 = pos
     if i1 >= n:
         i1 -= n
-    c0 = srt[start + i0]
-    c1 = srt[start + i1]
-    d0 = abs(_wrap(bearings[c0] - phi))
-    d1 = abs(_wrap(bearings[c1] - phi))
-    if c0 != c1 and abs(d0 - d1) <= 2.0 * EPS + 1e-12:
+    p0 = start + i0
+    p1 = start + i1
+    d0 = abs(_wrap(sbearing[p0] - phi))  # sbearing[p] is bearings[srt[p]]
+    d1 = abs(_wrap(sbearing[p1] - phi))
+    if p0 != p1 and abs(d0 - d1) <= 2.0 * EPS + 1e-12:
         sure = False
-    if d1 < d0 or (d1 == d0 and c1 < c0):
-        return c1, d1, sure
-    return c0, d0, sure
+    if d1 < d0 or (d1 == d0 and srt[p1] < srt[p0]):
+        return p1, d1, sure
+    return p0, d0, sure
 
 
 @njit(cache=True, nogil=True, inline="always")
@@ -214,107 +217,193 @@ def _insert(d, t, bd, bi, have, m):  # pragma: no cover - compiled
 
 
 @njit(cache=True, nogil=True)
-def _knn_block(cells, pxy, k, c0, c1, bx0, by0, bsize, nbx, nby, bstart, bidx, out, tie):  # pragma: no cover - compiled
-    """The ``k`` nearest poses of cells ``c0:c1`` (sorted by squared distance, then index); ``tie``
-    marks cells whose first k + 1 distances hold two equal values.
+def _bin_table(sbearing, seg_start, seg_len, bins, lo, dense):  # pragma: no cover - compiled
+    scale = bins / TWO_PI
+    for t in range(seg_start.shape[0]):
+        a = seg_start[t]
+        n = seg_len[t]
+        j = 0
+        prev = -1
+        for b in range(bins):
+            lo[t, b] = j
+            while j < n:
+                v = math.floor((sbearing[a + j] + PI) * scale)  # sensor._bin, as numpy computes it
+                ib = int(v) if v > 0 else 0
+                if ib > bins - 1:
+                    ib = bins - 1
+                if ib != b:
+                    break
+                if prev == b:
+                    dense[t] = True
+                prev = b
+                j += 1
 
-    A cell next to the previous one searches the box of radius (previous (k+1)-th distance + the
-    step between them), which holds all its k + 1 nearest; otherwise rings of buckets grow until
-    the (k+1)-th distance lies inside the searched ring.
+
+def bin_table(sorted_bearings, seg_start, seg_len, bins) -> tuple:
+    """``BeamTable._bins`` compiled: (T, bins) int32, the number of the pose's sorted bearings
+    [rad] in lower bins, and (T,) bool, some bin holds two bearings; the same arrays."""
+    lo = np.empty((len(seg_start), bins), np.int32)
+    dense = np.zeros(len(seg_start), np.bool_)
+    warm(_bin_table)
+    _bin_table(np.ascontiguousarray(sorted_bearings, dtype=np.float64),
+               np.ascontiguousarray(seg_start, dtype=np.int64),
+               np.ascontiguousarray(seg_len, dtype=np.int64), int(bins), lo, dense)
+    return lo, dense
+
+
+KNN_TILE = 16  # cells per side of the tiles of the nearest-pose query (in units of the cell spacing)
+
+
+@njit(cache=True, nogil=True)
+def _knn_tiles(cells, pxy, k, tile, out, tie):  # pragma: no cover - compiled
+    """The ``k`` nearest poses of every cell (sorted by squared distance, then index); ``tie``
+    marks cells whose first k + 1 squared distances hold two equal values.
+
+    Cells are grouped into square tiles of side ``tile`` [m] (a counting sort by tile). Per tile,
+    with centre c, D the (k+1)-th distance from c over all poses and h the largest distance of a
+    cell of the tile from c: a cell's k + 1 nearest poses lie within D + h of it, so within
+    D + 2 h of c; those candidates, sorted by their distance dc from c, are what the tile's cells
+    search. A cell at distance hc from c stops at the first candidate with dc - hc beyond its
+    (k+1)-th distance so far (no later one can be nearer). Neighbouring cells so share one
+    candidate list, and each cell looks at little more than its own k + 1 poses.
     """
     n = pxy.shape[0]
+    nc = cells.shape[0]
     m = k + 1 if n > k else k
+    # tiles: counting sort of the cells by (tile row, tile column)
+    x0 = np.inf
+    y0 = np.inf
+    x1 = -np.inf
+    y1 = -np.inf
+    for i in range(nc):
+        x0 = min(x0, cells[i, 0])
+        x1 = max(x1, cells[i, 0])
+        y0 = min(y0, cells[i, 1])
+        y1 = max(y1, cells[i, 1])
+    ntx = int((x1 - x0) / tile) + 1
+    nty = int((y1 - y0) / tile) + 1
+    tid = np.empty(nc, np.int64)
+    count = np.zeros(ntx * nty + 1, np.int64)
+    for i in range(nc):
+        tx = min(int((cells[i, 0] - x0) / tile), ntx - 1)
+        ty = min(int((cells[i, 1] - y0) / tile), nty - 1)
+        tid[i] = ty * ntx + tx
+        count[tid[i] + 1] += 1
+    for b in range(ntx * nty):
+        count[b + 1] += count[b]
+    order = np.empty(nc, np.int64)
+    fill = count[:-1].copy()
+    for i in range(nc):
+        order[fill[tid[i]]] = i
+        fill[tid[i]] += 1
     bd = np.empty(m)
     bi = np.empty(m, np.int64)
-    prev = False
-    px_ = 0.0
-    py_ = 0.0
-    for ci in range(c0, c1):
-        cx = cells[ci, 0]
-        cy = cells[ci, 1]
+    cd = np.empty(n)
+    ci_ = np.empty(n, np.int64)
+    bufd = np.empty(n)
+    bufi = np.empty(n, np.int64)
+    ext = np.empty(m, np.int64)
+    for b in range(ntx * nty):
+        q0 = count[b]
+        q1 = count[b + 1]
+        if q0 == q1:
+            continue
+        # the tile's centre and half-size h
+        mx = 0.0
+        my = 0.0
+        for q in range(q0, q1):
+            mx += cells[order[q], 0]
+            my += cells[order[q], 1]
+        mx /= q1 - q0
+        my /= q1 - q0
+        h = 0.0
+        for q in range(q0, q1):
+            i = order[q]
+            h = max(h, math.sqrt((cells[i, 0] - mx) ** 2 + (cells[i, 1] - my) ** 2))
         have = 0
-        if prev:
-            step = math.sqrt((cx - px_) ** 2 + (cy - py_) ** 2)
-            rad = (math.sqrt(bd[m - 1]) + step) * (1.0 + 1e-9) + 1e-9
-            rad2 = rad * rad
-            gx0 = max(0, int(math.floor((cx - rad - bx0) / bsize)) - 1)
-            gx1 = min(nbx - 1, int(math.floor((cx + rad - bx0) / bsize)) + 1)
-            gy0 = max(0, int(math.floor((cy - rad - by0) / bsize)) - 1)
-            gy1 = min(nby - 1, int(math.floor((cy + rad - by0) / bsize)) + 1)
-            for gy in range(gy0, gy1 + 1):
-                for b in range(gy * nbx + gx0, gy * nbx + gx1 + 1):
-                    for q in range(bstart[b], bstart[b + 1]):
-                        t = bidx[q]
-                        dx = cx - pxy[t, 0]
-                        dy = cy - pxy[t, 1]
-                        d = dx * dx + dy * dy
-                        if d <= rad2:
-                            have = _insert(d, t, bd, bi, have, m)
-        if have < m:  # first cell (or, never seen, a short box): grow rings of buckets
+        for t in range(n):
+            dx = mx - pxy[t, 0]
+            dy = my - pxy[t, 1]
+            have = _insert(dx * dx + dy * dy, t, bd, bi, have, m)
+        rad = (math.sqrt(bd[m - 1]) + 2.0 * h) * (1.0 + 1e-9) + 1e-9
+        nc_ = 0
+        for t in range(n):
+            dx = mx - pxy[t, 0]
+            dy = my - pxy[t, 1]
+            d = math.sqrt(dx * dx + dy * dy)
+            if d <= rad:
+                cd[nc_] = d
+                ci_[nc_] = t
+                nc_ += 1
+        srt = np.argsort(cd[:nc_])
+        cdist = cd[:nc_][srt]
+        cidx = ci_[:nc_][srt]
+        prev = -1
+        for q in range(q0, q1):
+            i = order[q]
+            cx = cells[i, 0]
+            cy = cells[i, 1]
+            hc = math.sqrt((cx - mx) ** 2 + (cy - my) ** 2) * (1.0 + 1e-9) + 1e-9
+            # u: a bound on this cell's (k+1)-th distance (the previous cell's k + 1 poses, or
+            # the first k + 1 candidates, are k + 1 poses within u of it)
+            u2 = 0.0
+            for j in range(m):
+                t = out[prev, j] if prev >= 0 and j < k else (ext[j] if prev >= 0 else cidx[j])
+                dx = cx - pxy[t, 0]
+                dy = cy - pxy[t, 1]
+                u2 = max(u2, dx * dx + dy * dy)
+            u = math.sqrt(u2) * (1.0 + 1e-9) + 1e-9
+            lim = u + hc
+            u2 = u * u
+            nb = 0
+            for j in range(nc_):  # every pose within u, in the order of dc
+                if cdist[j] > lim:
+                    break
+                t = cidx[j]
+                dx = cx - pxy[t, 0]
+                dy = cy - pxy[t, 1]
+                d = dx * dx + dy * dy
+                if d <= u2:
+                    bufd[nb] = d
+                    bufi[nb] = t
+                    nb += 1
             have = 0
-            seen = 0
-            qx = int(math.floor((cx - bx0) / bsize))
-            qy = int(math.floor((cy - by0) / bsize))
-            # rings nearer than the bucket grid are empty: start at the first that reaches it
-            R = max(0, qx - (nbx - 1), -qx, qy - (nby - 1), -qy)
-            while True:
-                for gy in range(max(0, qy - R), min(nby, qy + R + 1)):
-                    if gy == qy - R or gy == qy + R:
-                        gxs = range(max(0, qx - R), min(nbx, qx + R + 1))
-                    else:
-                        gxs = range(qx - R, qx + R + 1, 2 * R)  # R > 0 here
-                    for gx in gxs:
-                        if gx < 0 or gx >= nbx:
-                            continue
-                        b = gy * nbx + gx
-                        for q in range(bstart[b], bstart[b + 1]):
-                            t = bidx[q]
-                            dx = cx - pxy[t, 0]
-                            dy = cy - pxy[t, 1]
-                            seen += 1
-                            have = _insert(dx * dx + dy * dy, t, bd, bi, have, m)
-                if seen == n:
-                    break
-                lim = R * bsize
-                if have == m and bd[m - 1] < lim * lim:
-                    break
-                R += 1
-        prev = True
-        px_ = cx
-        py_ = cy
-        t_ = False
-        for j in range(k):
-            out[ci - c0, j] = bi[j]
-        for j in range(m - 1):
-            if bd[j] == bd[j + 1]:
-                t_ = True
-        tie[ci - c0] = t_
+            for j in range(nb):
+                have = _insert(bufd[j], bufi[j], bd, bi, have, m)
+            t_ = False
+            for j in range(k):
+                out[i, j] = bi[j]
+            if m > k:
+                ext[k] = bi[m - 1]  # the (k+1)-th pose, for the next cell's bound
+            for j in range(m - 1):
+                if bd[j] == bd[j + 1]:
+                    t_ = True
+            tie[i] = t_
+            prev = i
 
 
-def nearest_poses(cells: np.ndarray, pose_xy: np.ndarray, k: int, tree=None) -> np.ndarray:
+def nearest_poses(cells: np.ndarray, pose_xy: np.ndarray, k: int, tree=None,
+                  spacing: float | None = None) -> np.ndarray:
     """(n_cells, k) int64: for every cell centre [m] the indices of its ``k`` nearest poses [m]
     (world frame), nearest first; the same poses in the same order as
     ``scipy.spatial.cKDTree(pose_xy).query(cells, k)`` (tied cells are answered by the KD-tree).
+
+    spacing : float [m], optional; the cells' spacing (a grid's ``grid_size``), which sets the
+        tile size of the search (``KNN_TILE`` cells); by default estimated from the cells' extent.
     """
     cells = np.ascontiguousarray(cells, dtype=np.float64)
     pxy = np.ascontiguousarray(pose_xy, dtype=np.float64)
     n = len(pxy)
     k = min(int(k), n)
-    lo = pxy.min(axis=0)
-    span = max(float((pxy.max(axis=0) - lo).max()), 1.0)  # [m]; poses all in one spot: 1 m
-    nb = max(1, int(np.sqrt(n * KNN_BUCKETS)))
-    bsize = span / nb * (1 + 1e-9)
-    nbx = nby = nb
-    gx = np.minimum((np.floor((pxy[:, 0] - lo[0]) / bsize)).astype(np.int64), nbx - 1)
-    gy = np.minimum((np.floor((pxy[:, 1] - lo[1]) / bsize)).astype(np.int64), nby - 1)
-    b = gy * nbx + gx
-    order = np.argsort(b, kind="stable")
-    bstart = np.searchsorted(b[order], np.arange(nbx * nby + 1)).astype(np.int64)
     out = np.empty((len(cells), k), np.int64)
     tie = np.zeros(len(cells), np.bool_)
-    warm(_knn_block)
-    _knn_block(cells, pxy, k, 0, len(cells), float(lo[0]), float(lo[1]), float(bsize), nbx, nby,
-               bstart, order.astype(np.int64), out, tie)
+    if len(cells) == 0:
+        return out
+    if spacing is None or not spacing > 0:
+        span = float(np.max(cells.max(axis=0) - cells.min(axis=0)))
+        spacing = span / max(1.0, np.sqrt(len(cells))) if span > 0 else 1.0
+    warm(_knn_tiles)
+    _knn_tiles(cells, pxy, k, float(spacing) * KNN_TILE, out, tie)
     if tie.any():
         from scipy.spatial import cKDTree
         tree = tree if tree is not None else cKDTree(pxy)
@@ -324,7 +413,7 @@ def nearest_poses(cells: np.ndarray, pose_xy: np.ndarray, k: int, tree=None) -> 
 
 
 @njit(cache=True, nogil=True)
-def _cells_kernel(c0, c1, cells, poses, nn, reach, ranges, bearings, cls_hit, srt, key, seg_start,
+def _cells_kernel(c0, c1, cells, poses, nn, reach, ranges, cls_hit, srt, key, seg_start,
                   seg_len, bin_lo, dense, sbearing, bin_scale, bins, continuous, z_max, half, wb2,
                   bmin, bmax, l, step, count_kind, ka, kb, kc3, kinv2pi, sigma0, n_off, bcos, bsin,
                   acc, pairs):  # pragma: no cover - compiled
@@ -372,7 +461,7 @@ def _cells_kernel(c0, c1, cells, poses, nn, reach, ranges, bearings, cls_hit, sr
             if not dense[t]:
                 pa = _wrap(_atan2_fast(dy, dx) - poses[t, 2])
                 if abs(pa) < PI - EPS:
-                    k, diff, sure = _nearest_fast(t, pa, bearings, srt, seg_start, seg_len,
+                    k, diff, sure = _nearest_fast(t, pa, srt, seg_start, seg_len,
                                                   bin_lo, sbearing, bin_scale, bins)
                 if sure:
                     if not continuous:
@@ -407,7 +496,7 @@ def _cells_kernel(c0, c1, cells, poses, nn, reach, ranges, bearings, cls_hit, sr
                     hi_ = bmax[t] + wb2
                     wraps = (lo_ <= -PI + 1e-9) or (hi_ >= PI - 1e-9)
                     reach_ok = wraps or (phi >= lo_ - 1e-9 and phi <= hi_ + 1e-9)
-                k, diff = _nearest(t, phi, bearings, srt, key, seg_start, seg_len, bin_lo, dense,
+                k, diff = _nearest(t, phi, srt, key, seg_start, seg_len, bin_lo, dense,
                                    sbearing, bin_scale, bins)
                 wide = diff > wb2
                 if continuous:
@@ -482,7 +571,7 @@ def _cells_kernel(c0, c1, cells, poses, nn, reach, ranges, bearings, cls_hit, sr
 
 
 @njit(cache=True, nogil=True)
-def _poses_kernel(row0, row1, gx, gy, poses, reach, ranges, bearings, cls_hit, srt, key,
+def _poses_kernel(row0, row1, gx, gy, poses, reach, ranges, cls_hit, srt, key,
                   seg_start, seg_len, bin_lo, dense, sbearing, bin_scale, bins, continuous, z_max,
                   half, wb2, bmin, bmax, l, step, count_kind, ka, kb, kc3, kinv2pi, sigma0, n_off,
                   bcos, bsin, acc, s_end, s_off, pairs):  # pragma: no cover - compiled
@@ -533,7 +622,7 @@ def _poses_kernel(row0, row1, gx, gy, poses, reach, ranges, bearings, cls_hit, s
                 if not dense[t]:
                     pa = _wrap(_atan2_fast(dy, dx) - poses[t, 2])
                     if abs(pa) < PI - EPS:
-                        k, diff, sure = _nearest_fast(t, pa, bearings, srt, seg_start, seg_len,
+                        k, diff, sure = _nearest_fast(t, pa, srt, seg_start, seg_len,
                                                       bin_lo, sbearing, bin_scale, bins)
                     if sure:
                         if not continuous:
@@ -568,7 +657,7 @@ def _poses_kernel(row0, row1, gx, gy, poses, reach, ranges, bearings, cls_hit, s
                         hi_ = bmax[t] + wb2
                         wraps = (lo_ <= -PI + 1e-9) or (hi_ >= PI - 1e-9)
                         reach_ok = wraps or (phi >= lo_ - 1e-9 and phi <= hi_ + 1e-9)
-                    k, diff = _nearest(t, phi, bearings, srt, key, seg_start, seg_len, bin_lo, dense,
+                    k, diff = _nearest(t, phi, srt, key, seg_start, seg_len, bin_lo, dense,
                                        sbearing, bin_scale, bins)
                     wide = diff > wb2
                     if continuous:
@@ -678,15 +767,19 @@ def cell_evidence(cells, poses, nn, reach, table, cls_hit, n_classes, *, continu
     nn = np.zeros((0, 1), np.int64) if nn is None else np.ascontiguousarray(nn, dtype=np.int64)
     n_off = int(np.ceil(2 * l / step)) + 2
     from .sensor import BINS
+    srt = table._sorted.astype(np.int64)
+    bcos, bsin = beam_directions(table, poses)
+    # per-beam arrays in the sorted order of the bearing index: a pair's nearest beam is read
+    # at its sorted position, with no indirection through the beam index
     args = (cells, np.ascontiguousarray(poses, dtype=np.float64), nn,
-            np.ascontiguousarray(reach, dtype=np.float64), table.ranges, table.bearings,
-            np.ascontiguousarray(cls_hit, dtype=np.int64), table._sorted.astype(np.int64),
-            table._key, table._seg_start.astype(np.int64), table._seg_len.astype(np.int64),
-            table._bin_lo, table._dense, table._sorted_bearing, BINS / TWO_PI, BINS,
-            bool(continuous), float(z_max), float(w_obstacle) / 2, float(w_beam) / 2,
-            table.bearing_min, table.bearing_max, float(l), float(step),
-            COUNT_KINDS[sample_count], 2.0 * np.pi / l, -1.0 / (3.0 * l), 1.0 / 3.0,
-            1.0 / (2.0 * np.pi), float(sigma0), n_off, *beam_directions(table, poses))
+            np.ascontiguousarray(reach, dtype=np.float64), table.ranges[srt],
+            np.ascontiguousarray(cls_hit, dtype=np.int64)[srt], srt, table._key,
+            table._seg_start.astype(np.int64), table._seg_len.astype(np.int64), table._bin_lo,
+            table._dense, table._sorted_bearing, BINS / TWO_PI, BINS, bool(continuous),
+            float(z_max), float(w_obstacle) / 2, float(w_beam) / 2, table.bearing_min,
+            table.bearing_max, float(l), float(step), COUNT_KINDS[sample_count],
+            2.0 * np.pi / l, -1.0 / (3.0 * l), 1.0 / 3.0, 1.0 / (2.0 * np.pi), float(sigma0),
+            n_off, bcos[srt], bsin[srt])
     warm(_cells_kernel if grid is None or nn.shape[0] else _poses_kernel)
     n = len(cells)
     nt = min(threads() if n_threads is None else int(n_threads), max(1, n // 256))

@@ -238,6 +238,32 @@ def scans_from_cell(scan) -> list:
     return out
 
 
+def _scans_ok(scans: list, semantic: bool | None) -> bool:
+    """True when every scan passes every check of :func:`validate` (all scans at once: a few
+    array operations instead of a dozen per scan, 1-2 ms for the Intel data instead of 15-35);
+    False when any check fails, and then :func:`validate` finds the first problem scan by scan."""
+    rows = 3 if semantic else None
+    for s in scans:
+        if not (isinstance(s, np.ndarray) and s.dtype.kind == "f" and s.ndim == 2
+                and s.shape[0] in (2, 3) and s.shape[1] > 0) or (rows and s.shape[0] != rows):
+            return False
+    if all(s.shape[0] == scans[0].shape[0] for s in scans):
+        every = np.concatenate(scans, axis=1)
+        if not np.isfinite(every).all() or np.abs(every[:2]).max() > MAX_COORD:
+            return False
+        lab = every[2] if semantic else None
+    else:  # mixed 2xN and 3xN (labels ignored)
+        xy = np.concatenate([s[:2] for s in scans], axis=1)
+        if not all(np.isfinite(s[2:]).all() for s in scans if s.shape[0] == 3):
+            return False
+        if not np.isfinite(xy).all() or np.abs(xy).max() > MAX_COORD:
+            return False
+        lab = None
+    if lab is not None and np.any((lab < 1) | (lab > N_LABELS) | (lab != np.round(lab))):
+        return False
+    return True
+
+
 def validate(poses: np.ndarray, scans: list, semantic: bool | None = None) -> None:
     """Check poses and scans; raise :class:`InputError` with one sentence on the first problem.
 
@@ -263,7 +289,9 @@ def validate(poses: np.ndarray, scans: list, semantic: bool | None = None) -> No
     if len(scans) != len(poses):
         raise InputError(f"there are {len(poses)} poses but {len(scans)} scans; "
                          "each pose needs exactly one scan.")
-    for t, s in enumerate(scans):
+    if _scans_ok(scans, semantic):
+        return
+    for t, s in enumerate(scans):  # something is wrong: find the first problem, scan by scan
         s = real_array(s, f"scan {t}")
         if s.ndim != 2 or s.shape[0] not in (2, 3):
             raise InputError(f"scan {t} must be a 2xN (or 3xN with labels) array; got shape {s.shape}.")

@@ -182,7 +182,11 @@ def count_evidence(grid: Grid, poses, scans, *, model: str = "discrete", semanti
                     (sigma0, "sigma0"), (l, "l"), (sample_step, "sample_step")):
         _check(v, name)
     poses = np.asarray(poses, dtype=float)
-    table = BeamTable.from_scans(scans)
+    if engine == "auto":
+        per_cell = len(poses) if nearest_poses is None else min(nearest_poses, len(poses))
+        big = beams == "all" or grid.n_cells * per_cell >= COMPILED_FROM
+        engine = "compiled" if big else "numpy"
+    table = BeamTable.from_scans(scans, compiled=engine == "compiled")
     n_classes = num_labels + 1 if semantic else 2
     if semantic:
         cls_hit = table.labels - 1
@@ -194,16 +198,12 @@ def count_evidence(grid: Grid, poses, scans, *, model: str = "discrete", semanti
     free = n_classes - 1
     longest = np.zeros(len(poses))
     np.maximum.at(longest, table.pose_of, table.ranges)
-    if engine == "auto":
-        per_cell = len(poses) if nearest_poses is None else min(nearest_poses, len(poses))
-        big = beams == "all" or grid.n_cells * per_cell >= COMPILED_FROM
-        engine = "compiled" if big else "numpy"
     last_stats.clear()
     if engine == "compiled" and free_samples == "all" and np.all(np.diff(table.first) > 0):
         from . import compiled
         stats = last_stats if stats is None else stats
         nn = None if nearest_poses is None else compiled.nearest_poses(
-            grid.cells, poses[:, :2], nearest_poses)
+            grid.cells, poses[:, :2], nearest_poses, spacing=grid.grid_size)
         if beams == "all":
             acc = compiled.all_beams_evidence(grid, poses, table, cls_hit, n_classes, nn,
                                               z_max=z_max, sigma0=sigma0, l=l, step=sample_step,

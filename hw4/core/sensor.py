@@ -71,7 +71,10 @@ class BeamTable:
     first: np.ndarray
 
     @classmethod
-    def from_scans(cls, scans) -> "BeamTable":
+    def from_scans(cls, scans, compiled: bool = False) -> "BeamTable":
+        """The table of a list of T scans (2, N) or (3, N) [m], robot frame. ``compiled``: build
+        the per-pose bin table with :func:`hw4.core.compiled.bin_table` (the same arrays, one
+        pass instead of five numpy passes over its T x BINS entries)."""
         counts = np.array([np.shape(s)[1] for s in scans])
         first = np.concatenate([[0], np.cumsum(counts)])
         xy = np.concatenate([np.asarray(s, dtype=float)[:2] for s in scans], axis=1)
@@ -82,18 +85,18 @@ class BeamTable:
             labels = np.zeros(len(ranges), dtype=np.int64)
         pose_of = np.repeat(np.arange(len(scans)), counts)
         table = cls(ranges, bearings, labels, pose_of, first)
-        table._index()
+        table._index(compiled)
         return table
 
-    def _index(self):
+    def _index(self, compiled: bool = False):
         # Per pose, the distinct bearings in ascending order, each represented by the smallest
         # beam index that has it (np.nanargmin returns the first of equal minima).
         key = self.pose_of * 8.0 + self.bearings  # bearings lie in (-4, 4): pose blocks are disjoint
-        order = np.lexsort((np.arange(len(key)), self.bearings, self.pose_of))
+        order = self._order()
         keep = np.ones(len(order), dtype=bool)
         keep[1:] = (self.pose_of[order][1:] != self.pose_of[order][:-1]) | (
             self.bearings[order][1:] != self.bearings[order][:-1])
-        self._sorted = order[keep]
+        self._sorted = order if keep.all() else order[keep]
         self._key = key[self._sorted]
         seg = np.searchsorted(self.pose_of[self._sorted], np.arange(len(self.first)))
         self._seg_start, self._seg_len = seg[:-1], np.diff(seg)
@@ -103,16 +106,52 @@ class BeamTable:
         # L = (bearings in lower bins) plus one if the next sorted bearing is below phi: exact.
         # Poses with two bearings in one bin use binary search instead.
         n_poses = len(self.first) - 1
+        if compiled:
+            from .compiled import bin_table
+            self._bin_lo, self._dense = bin_table(self.bearings[self._sorted], self._seg_start,
+                                                  self._seg_len, BINS)
+        else:
+            self._bin_lo, self._dense = self._bins(n_poses)
+        self._sorted_bearing = np.append(self.bearings[self._sorted], np.inf)
+        if np.all(self._seg_len > 0):  # a pose's sorted bearings: its smallest first, largest last
+            self.bearing_min = self._sorted_bearing[self._seg_start]
+            self.bearing_max = self._sorted_bearing[self._seg_start + self._seg_len - 1]
+        else:
+            self.bearing_min = np.full(n_poses, np.inf)
+            self.bearing_max = np.full(n_poses, -np.inf)
+            np.minimum.at(self.bearing_min, self.pose_of, self.bearings)
+            np.maximum.at(self.bearing_max, self.pose_of, self.bearings)
+
+    def _bins(self, n_poses: int) -> tuple:
+        """(T, BINS) int32 bearings of the pose in lower bins, and (T,) bool: a bin holds two."""
         pose_s = self.pose_of[self._sorted]
         count = np.bincount(pose_s * BINS + _bin(self.bearings[self._sorted]),
-                            minlength=n_poses * BINS).reshape(n_poses, BINS)
-        self._bin_lo = (np.cumsum(count, axis=1) - count).astype(np.int32)
-        self._dense = np.any(count > 1, axis=1)
-        self._sorted_bearing = np.append(self.bearings[self._sorted], np.inf)
-        self.bearing_min = np.full(n_poses, np.inf)
-        self.bearing_max = np.full(n_poses, -np.inf)
-        np.minimum.at(self.bearing_min, self.pose_of, self.bearings)
-        np.maximum.at(self.bearing_max, self.pose_of, self.bearings)
+                            minlength=n_poses * BINS).astype(np.int32)
+        # bearings of the pose in lower bins: the running count over all poses' bins (one flat
+        # pass), less the bin's own count and the bearings of the poses before
+        below = np.cumsum(count, dtype=np.int32)
+        below -= count
+        count = count.reshape(n_poses, BINS)
+        below = below.reshape(n_poses, BINS)
+        below -= self._seg_start.astype(np.int32)[:, None]
+        return below, count.max(axis=1, initial=0) > 1
+
+    def _order(self) -> np.ndarray:
+        """Beam indices sorted by (pose, bearing, index): ``np.lexsort`` of the three, taken scan
+        by scan (scans are contiguous blocks), and skipped for scans already in bearing order
+        (a laser's usually are: the order is then the identity)."""
+        b = self.bearings
+        n = len(b)
+        up = np.ones(n, dtype=bool)
+        up[1:] = b[1:] >= b[:-1]
+        up[self.first[:-1][self.first[:-1] < n]] = True  # a scan's first beam starts its block
+        if up.all():
+            return np.arange(n)
+        order = np.arange(n)
+        for t in np.unique(self.pose_of[~up]):
+            a, e = self.first[t], self.first[t + 1]
+            order[a:e] = a + np.argsort(b[a:e], kind="stable")
+        return order
 
     def nearest(self, pose_idx, phi, return_diff: bool = False):
         """Global index of the beam of pose ``pose_idx`` nearest in bearing to ``phi`` [rad].
