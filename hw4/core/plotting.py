@@ -28,6 +28,11 @@ UNOBSERVED_VARIANCE = "0.82"   # light grey, outside viridis, for them in plot_v
 # figure comparing a discrete with a continuous map uses the discrete scale, which holds both.
 VARIANCE_LOG_DISCRETE = (4e-6, 0.25)
 VARIANCE_LOG_CONTINUOUS = (1e-4, 0.25)
+# Figure sizes [in] of one map of the whole building on its own (with its colour bar, or with the
+# class legend on its right): small enough that a page shows the map at about its drawn size, so
+# that the 8.5-9 pt text of hw4.book.style() prints at 8.5-9 pt, not scaled down to 5 pt.
+MAP_FIGSIZE = (4.3, 3.55)
+SEMANTIC_MAP_FIGSIZE = (5.5, 3.55)
 
 
 def style():
@@ -122,15 +127,26 @@ def semantic_rgb(ogm) -> np.ndarray:
 
 def class_legend(ax, num_classes=6, loc="upper left", **kw):
     """Legend naming the six regions, free space and unknown (outside the axes, on the right,
-    unless ``loc``/``bbox_to_anchor`` say otherwise)."""
+    one entry a line, unless ``loc``/``bbox_to_anchor`` say otherwise)."""
     if loc == "upper left" and "bbox_to_anchor" not in kw:
         kw["bbox_to_anchor"] = (1.02, 1.0)
-    return ax.legend(handles=class_handles(num_classes), loc=loc, framealpha=0.9, **kw)
+        kw.setdefault("borderaxespad", 0.0)
+    return ax.legend(handles=class_handles(num_classes, wrap=False), loc=loc, framealpha=0.9,
+                     **kw)
 
 
-def class_handles(num_classes=6) -> list:
-    """Legend handles of the regions, free space and unknown, in the maps' colours."""
-    handles = [Patch(color=CLASS_COLORS[i], label=CLASS_NAMES[i]) for i in range(num_classes)]
+def class_label(c: int, wrap: bool = False) -> str:
+    """Legend text of the data's label ``c`` (1..6): "label 1 (north rooms)", the number the
+    data set gives the region and the handout's name for that number (``wrap``: the name on a
+    second line, for legends set in columns under a map)."""
+    return f"label {c}{chr(10) if wrap else ' '}({CLASS_NAMES[c - 1]})"
+
+
+def class_handles(num_classes=6, wrap: bool = True) -> list:
+    """Legend handles of the regions (:func:`class_label`), free space and unknown, in the
+    maps' colours; ``wrap`` (default, for legends in columns) puts each name on a second line."""
+    handles = [Patch(color=CLASS_COLORS[i], label=class_label(i + 1, wrap))
+               for i in range(num_classes)]
     handles += [Patch(facecolor=FREE_COLOR, edgecolor="0.6", label="free"),
                 Patch(color=UNKNOWN_COLOR, label="unknown")]
     return handles
@@ -168,7 +184,7 @@ def plot_dataset(data, ax=None, every=3, title=None, path_color="crimson"):
     if data.semantic:
         ax.scatter(pts[:, 0], pts[:, 1], s=0.3, c=CLASS_COLORS[labels - 1], linewidths=0,
                    rasterized=True)
-        handles = [Patch(color=CLASS_COLORS[i], label=CLASS_NAMES[i]) for i in range(6)]
+        handles = [Patch(color=CLASS_COLORS[i], label=class_label(i + 1)) for i in range(6)]
     else:
         ax.scatter(pts[:, 0], pts[:, 1], s=0.3, c="k", linewidths=0, rasterized=True)
         handles = []

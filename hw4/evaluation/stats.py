@@ -171,6 +171,12 @@ class LabelChange:
         Changed cells that the other map calls free (reference not free), and the reverse.
     only_reference, only_other : int
         Reference cells observed in one map only.
+    region_compared : int
+        Compared cells that the reference map calls occupied (a region of a semantic map).
+    region_kept : int
+        Of those, cells the other map also calls occupied (any region).
+    region_swapped : int
+        Of those, cells the other map gives another region (semantic maps; 0 for binary maps).
     """
     compared: int
     changed: int
@@ -178,11 +184,26 @@ class LabelChange:
     from_free: int
     only_reference: int
     only_other: int
+    region_compared: int = 0
+    region_kept: int = 0
+    region_swapped: int = 0
 
     @property
     def share_changed(self) -> float:
         """changed / compared, in [0, 1] (nan when nothing is compared)."""
         return self.changed / self.compared if self.compared else float("nan")
+
+    @property
+    def share_swapped(self) -> float:
+        """region_swapped / region_compared: the share of the reference's occupied (region)
+        cells that the other map puts in another region, in [0, 1] (nan without such cells)."""
+        return self.region_swapped / self.region_compared if self.region_compared else float("nan")
+
+    @property
+    def share_swapped_kept(self) -> float:
+        """region_swapped / region_kept: of the reference's region cells that the other map
+        still calls a region, the share in another region, in [0, 1] (nan without such cells)."""
+        return self.region_swapped / self.region_kept if self.region_kept else float("nan")
 
 
 def compare_labels(reference, other, threshold: float = 0.5) -> LabelChange:
@@ -205,10 +226,14 @@ def compare_labels(reference, other, threshold: float = 0.5) -> LabelChange:
     free = free_label(reference)
     both = (a >= 0) & (b >= 0)
     diff = both & (a != b)
+    region = both & (a != free)                  # the reference's occupied / region cells
+    kept = region & (b != free)
     return LabelChange(
         compared=int(both.sum()), changed=int(diff.sum()),
         to_free=int((diff & (b == free)).sum()), from_free=int((diff & (a == free)).sum()),
-        only_reference=int(((a >= 0) & (b < 0)).sum()), only_other=int(((a < 0) & (b >= 0)).sum()))
+        only_reference=int(((a >= 0) & (b < 0)).sum()), only_other=int(((a < 0) & (b >= 0)).sum()),
+        region_compared=int(region.sum()), region_kept=int(kept.sum()),
+        region_swapped=int((kept & (b != a)).sum()))
 
 
 def occupied_recall(reference, other, radius: float, threshold: float = 0.5) -> float:
