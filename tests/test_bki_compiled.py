@@ -191,3 +191,19 @@ def test_stable_order_is_a_stable_argsort():
     big = rng.integers(0, 1 << 60, 1000)               # too wide to pack with the index
     order, sk = compiled.stable_order(big, (1 << 60) - 1)
     assert np.array_equal(order, np.argsort(big, kind="stable"))
+
+
+def test_cli_engines_write_the_same_files(tmp_path, capsys):
+    from hw4.bki.cli import AUTO_NUMPY_SCANS, choose_engine, main
+    assert choose_engine("auto", AUTO_NUMPY_SCANS) == "numpy"
+    assert choose_engine("auto", AUTO_NUMPY_SCANS + 1) == "compiled"
+    assert choose_engine("numpy", 1000) == "numpy"
+    outs = {}
+    for engine in ("numpy", "compiled"):
+        out = tmp_path / engine
+        assert main(["--dataset", "toy", "--scans", "3", "--no-figures", "--engine", engine,
+                     "--out", str(out)]) == 0
+        outs[engine] = out
+    assert capsys.readouterr().out.count("3 scans:") == 2
+    for name in ("voxels.csv", "voxels.ply"):
+        assert (outs["numpy"] / name).read_bytes() == (outs["compiled"] / name).read_bytes()

@@ -154,6 +154,8 @@ def test_cli_toy_video_and_help(tmp_path, capsys):
     assert "2 scans:" in capsys.readouterr().out
     assert (out / "mapping.gif").read_bytes()[:6] in (b"GIF89a", b"GIF87a")
     assert (out / "mapping.mp4").read_bytes()[4:8] == b"ftyp"
+    assert (out / "mapping_poster.jpg").read_bytes()[:2] == b"\xff\xd8"   # JPEG, final name
+    assert not [p.name for p in out.iterdir() if p.name.startswith(".")]  # no temporary left
     with pytest.raises(SystemExit):
         _run_cli(["bki", "--help"])
     assert "voxels.csv" in capsys.readouterr().out

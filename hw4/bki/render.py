@@ -232,7 +232,7 @@ def _blend(a: np.ndarray, b: np.ndarray, t: float) -> np.ndarray:
 
 
 def write_video(frames, gif_path=None, mp4_path=None, fps: float = 2.0, hold: int = 1,
-                fade: int = 0, gif_fade: int | None = None) -> list[Path]:
+                fade: int = 0, gif_fade: int | None = None, poster=None) -> list[Path]:
     """Write frames (list of (H, W, 3) uint8 arrays) as a looping GIF and/or an H.264 MP4.
 
     The MP4 plays at ``fps`` frames per second and shows each given frame for ``hold`` video
@@ -243,7 +243,8 @@ def write_video(frames, gif_path=None, mp4_path=None, fps: float = 2.0, hold: in
     halfway blend), to stay small (each GIF frame is stored whole; the MP4 is the smooth one). The defaults (``hold=1``, ``fade=0``) write one video frame per given frame.
     The MP4 uses the ffmpeg binary shipped by ``imageio-ffmpeg``; frames are padded to even sizes.
     Beside the MP4 goes its poster frame, the last frame (the whole map), as ``<name>_poster.jpg``
-    (:func:`poster_path`; the book's HTML player shows it before the video plays).
+    (:func:`poster_path`; the book's HTML player shows it before the video plays), or at
+    ``poster`` when given.
     """
     import imageio.v2 as imageio
     if hold < 1 or fade < 0:
@@ -274,7 +275,7 @@ def write_video(frames, gif_path=None, mp4_path=None, fps: float = 2.0, hold: in
                     for j in range(1, fade + 1):
                         wr.append_data(_blend(f, pad[i + 1], j / (fade + 1)))
         out.append(Path(mp4_path))
-        write_poster(frames[-1], poster_path(mp4_path))
+        write_poster(frames[-1], poster if poster is not None else poster_path(mp4_path))
     return out
 
 
@@ -687,9 +688,23 @@ def plot_slices(panels: dict, z: float, cam: Camera, width: float = 4.0, fit: bo
     return fig
 
 
+def release_memory() -> None:
+    """Collect garbage and hand freed heap memory back to the system (glibc's ``malloc_trim``;
+    elsewhere only the collection): a 3D figure of ~100k voxel faces is a reference cycle, and
+    the heap keeps the room of freed figures and views, which counts as the process's memory."""
+    import ctypes
+    import gc
+    gc.collect()
+    try:
+        ctypes.CDLL("libc.so.6").malloc_trim(0)
+    except (OSError, AttributeError):
+        pass
+
+
 def mapping_video(view_groups, cam: Camera, titles, gif=None, mp4=None, strip=None,
                   strip_scans=None, width: float = 4.0, dpi: int = 120, fps: float = 2.0,
-                  trajectory=None, strip_width: float = 7.0, hold: int = 1, fade: int = 0) -> list:
+                  trajectory=None, strip_width: float = 7.0, hold: int = 1, fade: int = 0,
+                  poster=None) -> list:
     """Render the map after each scan (methods side by side) and write GIF, MP4 and a PNG strip.
 
     Parameters
@@ -704,6 +719,8 @@ def mapping_video(view_groups, cam: Camera, titles, gif=None, mp4=None, strip=No
     strip_width : float [inch], width of the strip (:func:`plot_strip`), its print size
     fps, hold, fade : frame rate, video frames per map and cross-fade frames between maps
         (:func:`write_video`; e.g. 24, 24, 12 for a smooth video)
+    poster : path, optional
+        Where the MP4's poster frame goes (default: beside it, :func:`poster_path`).
     trajectory : (T, 3) array [m], optional
         Sensor origins; frame ``i`` draws the path up to scan ``i``.
 
@@ -711,7 +728,6 @@ def mapping_video(view_groups, cam: Camera, titles, gif=None, mp4=None, strip=No
     -------
     list of (H, W, 3) uint8 frames
     """
-    import gc
     import matplotlib.pyplot as plt
     frames, kept = [], []
     for i, views in enumerate(view_groups):
@@ -723,8 +739,8 @@ def mapping_video(view_groups, cam: Camera, titles, gif=None, mp4=None, strip=No
         frames.append(figure_to_array(fig))
         plt.close(fig)
         del fig, views  # free this frame's map views and figure before the next map is viewed
-        gc.collect()    # (a 3D figure of ~100k voxel faces is a reference cycle)
-    write_video(frames, gif, mp4, fps, hold=hold, fade=fade)
+        release_memory()
+    write_video(frames, gif, mp4, fps, hold=hold, fade=fade, poster=poster)
     if strip is not None:
         n = len(frames)
         picks = strip_scans or sorted({max(1, round(n * q)) for q in (0.25, 0.5, 0.75, 1.0)})

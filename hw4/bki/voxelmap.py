@@ -353,8 +353,9 @@ class VoxelMap:
 
     def view(self) -> MapView:
         """Posterior of every voxel with evidence (see :class:`MapView`)."""
-        vox, ev, count = self.evidence()
-        return posterior_view((vox + 0.5) * self.resolution, ev + self.prior, count,
+        vox, alpha, count = self.evidence()
+        alpha += self.prior   # a fresh copy: in place, the same values as ev + prior
+        return posterior_view((vox + 0.5) * self.resolution, alpha, count,
                               self.resolution, self.var_thresh)
 
 
