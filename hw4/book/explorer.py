@@ -396,13 +396,17 @@ class Explorer:
     def _draw_figure(self) -> bytes:
         """The explorer's figure as PNG bytes: map, variance, and the picked cell's neighbourhood.
 
-        The figure and its axes are made once (:meth:`_figure`); each redraw replaces what
-        the axes show. The panels' pixel boxes are kept for :meth:`pixel_to_world`.
+        The figure, its axes, ticks, labels and colour bars are made and drawn once
+        (:meth:`_figure`; their pixels are kept); a redraw restores those pixels and draws only
+        what the axes show (blitting), which keeps the text rendering of the ticks, most of a
+        full draw, out of every redraw. The panels' pixel boxes are kept for
+        :meth:`pixel_to_world`.
         """
         from matplotlib.patches import Circle, Rectangle
+        from PIL import Image
         ogm, ev = self.ogm, self.evidence
         fig, axes = self._figure()
-        for ax in axes:   # the axes, ticks and colour bars stay; what they show is redrawn
+        for ax in axes:   # what the axes show is made again
             for a in [*ax.images, *ax.lines, *ax.collections, *ax.patches]:
                 a.remove()
             if ax.get_legend() is not None:
@@ -432,7 +436,9 @@ class Explorer:
             plotting.plot_semantic(ogm, ax=ax, legend=False)
         else:
             plotting.plot_mean(ogm, ax=ax, **kw)
-        ax.set_title(f"cell {ev.cell}: ({cx:.2f}, {cy:.2f}) m")
+        ax.set_title(f"cell {ev.cell} ({cx:.2f}, {cy:.2f}) m, {2 * half:g} m wide")
+        ax.set_xlabel("")
+        ax.set_ylabel("")
         for r in rows:
             (px, py, _), (ex, ey) = poses[r["pose"]], ends[r["pose"], r["beam"]]
             ax.plot([px, ex], [py, ey], "-", color="tab:orange", lw=0.8, zorder=2)
@@ -448,19 +454,33 @@ class Explorer:
         ax.add_patch(Circle((cx, cy), ogm.l, fill=False, ls="--", color="k", lw=0.8, zorder=3))
         ax.add_patch(Rectangle((cx - g / 2, cy - g / 2), g, g, fill=False, color="red", lw=1.2,
                                zorder=5))
-        ax.set_xlim(cx - half, cx + half)
+        ax.set_xlim(cx - half, cx + half)   # square, as the panel: its box stays
         ax.set_ylim(cy - half, cy + half)
-        ax.set_ylabel("")
         ax.legend(loc="lower left", fontsize=7, framealpha=0.85)
-        for a in axes:
-            a.xaxis.label.set_size(8)
-            a.yaxis.label.set_size(8)
+        shown = []
+        for ax in axes:
+            arts = [*ax.images, *ax.lines, *ax.collections, *ax.patches, ax.get_legend()]
+            arts = sorted((a for a in arts if a is not None), key=lambda a: a.get_zorder())
+            for a in arts:
+                a.set_animated(True)   # left out of the kept pixels
+            shown.append(arts)
+        axes[2].title.set_animated(True)
+        canvas = fig.canvas
+        if self._background is None:
+            canvas.draw()
+            self._background = canvas.copy_from_bbox(fig.bbox)
+            self._height_px = FIG_PX[1]   # the panels as drawn (display px, origin bottom left)
+            self._axes_px = [(a.bbox.extents, a.transData.inverted().frozen().transform)
+                             for a in axes[:2]]
+        else:
+            canvas.restore_region(self._background)
+        for ax, arts in zip(axes, shown):
+            for a in arts:
+                ax.draw_artist(a)
+        axes[2].draw_artist(axes[2].title)
         buf = io.BytesIO()
-        fig.savefig(buf, format="png", dpi=FIG_DPI, bbox_inches=None,
-                    metadata={"Software": None}, pil_kwargs={"compress_level": 1})
-        self._height_px = FIG_PX[1]   # the panels as drawn (display pixels, origin bottom left)
-        self._axes_px = [(a.bbox.extents, a.transData.inverted().frozen().transform)
-                         for a in axes[:2]]
+        Image.fromarray(np.asarray(canvas.buffer_rgba())[..., :3]).save(
+            buf, format="png", compress_level=1)
         return buf.getvalue()
 
     def _legend_html(self) -> str:
@@ -491,6 +511,10 @@ class Explorer:
             axes = [box(*p) for p in PANELS]
             for a in axes:
                 a.tick_params(labelsize=8)
+                a.xaxis.label.set_size(8)
+                a.yaxis.label.set_size(8)
+            axes[2].set_xticks([])   # the window moves with the cell: its title gives its size
+            axes[2].set_yticks([])
             lo, hi = plotting.VARIANCE_LOG_CONTINUOUS
             scales = [(mpl.colors.Normalize(0, 1), plotting.OCCUPANCY_CMAP, "P(occupied)"),
                       (mpl.colors.LogNorm(lo, hi), plotting.VARIANCE_CMAP, "variance")]
@@ -501,7 +525,7 @@ class Explorer:
                     cax = box(*cb)
                     fig.colorbar(mpl.cm.ScalarMappable(norm=scale[0], cmap=scale[1]), cax=cax)
                     cax.tick_params(labelsize=8)
-            self._fig, self._axes = fig, axes
+            self._fig, self._axes, self._background = fig, axes, None
         return self._fig, self._axes
 
     def _end_point(self, row):
@@ -537,7 +561,7 @@ class Explorer:
         esc = html.escape
         head = ["pose", "pose x, y [m]", "beam", "range [m]", "|Δ bearing| [°]",
                 "end point to cell [m]", "k → " + ("class" if ogm.semantic else "α"),
-                "free samples within l", "Σ k → " + ("free" if ogm.semantic else "β")]
+                "free samples < l", "Σ k → " + ("free" if ogm.semantic else "β")]
         body = []
         for row in ev.by_beam():
             px, py, _ = ogm.poses[row["pose"]]
