@@ -207,3 +207,27 @@ def test_cli_engines_write_the_same_files(tmp_path, capsys):
     assert capsys.readouterr().out.count("3 scans:") == 2
     for name in ("voxels.csv", "voxels.ply"):
         assert (outs["numpy"] / name).read_bytes() == (outs["compiled"] / name).read_bytes()
+
+
+@pytest.mark.parametrize("method, res, K", [("sbki", 0.1, 4), ("sbki", 0.3, 20), ("scsm", 0.1, 3)])
+def test_the_map_is_the_same_on_any_number_of_threads(method, res, K):
+    rng = np.random.default_rng(7)
+    scans = [(rng.normal(0, 3, (4000, 3)), rng.integers(0, K, 4000)) for _ in range(3)]
+    maps = []
+    for threads in (1, 2, 3, 5):
+        m = VoxelMap(res, K, method, threads=threads)
+        for pts, lab in scans:
+            m.update(pts, lab)
+        maps.append(m)
+    for m in maps[1:]:
+        _same_map(maps[0], m)
+        assert np.array_equal(m.ev[:m.n_voxels], maps[0].ev[:maps[0].n_voxels])  # pool too
+        assert np.array_equal(m.table[:m.n_blocks], maps[0].table[:maps[0].n_blocks])
+    parts = compiled.scan_evidence(scans[0][0], scans[0][1], *_box(scans[0][0], res), 1, res, 0.3,
+                                   10.0, method == "scsm", n_threads=3)
+    assert len(parts) == 3                             # the work was indeed split
+
+
+def _box(pts, res):
+    base, bmin, bmax = compiled.bases(np.ascontiguousarray(pts), res)
+    return base, bmin - 1, bmax + 1 - (bmin - 1) + 1

@@ -20,11 +20,14 @@ same bit for bit (the tests compare the two engines):
 
 New voxels take pool slots in (block key, voxel in block) order here (the numpy engine: raveled
 voxel order of the scan's box); the pool's row order is internal, :meth:`VoxelMap.evidence` and
-:meth:`VoxelMap.view` are the same. One thread: the sums have one order, so the map is the same
-on any number of threads. Units: metres, world frame; voxel ``i = floor(x / r)``, centre
-``(i + 0.5) r``.
+:meth:`VoxelMap.view` are the same. Threads (``HW4_THREADS``, default 1; :func:`threads`): each
+sums the voxels of its own slab of x (whole blocks) over the same points in the same order, and
+the slabs are merged in key order, so map and pool are the same bit for bit on any number of
+threads. Units: metres, world frame; voxel ``i = floor(x / r)``, centre ``(i + 0.5) r``.
 """
 from __future__ import annotations
+
+import os
 
 import numpy as np
 from numba import njit
@@ -203,11 +206,12 @@ def _codes(base, lo, dims):  # pragma: no cover - compiled
 
 
 @njit(cache=True, nogil=True)
-def _scan_evidence(points, labels, base, order, codes, lo, dims, R, res, ell2, scale, sf2, table,
-                   counting):  # pragma: no cover - compiled
-    """Per-scan evidence in a sparse form. The points are visited in ``order`` (raveled voxel
-    order, stable), per point the offsets in lexicographic order; ``counting`` (S-CSM): every
-    point adds 1 to its own voxel (``R`` = 0), else the kernel weight to every voxel within ell.
+def _scan_evidence(points, labels, base, order, t0, t1, x0, x1, codes, lo, dims, R, res, ell2,
+                   scale, sf2, table, counting):  # pragma: no cover - compiled
+    """Per-scan evidence in a sparse form. The points ``order[t0:t1]`` are visited in that order
+    (raveled voxel order, stable), per point the offsets in lexicographic order; ``counting``
+    (S-CSM): every point adds 1 to its own voxel (``R`` = 0), else the kernel weight to every
+    voxel within ell. Only voxels with x index in ``[x0, x1)`` are summed (a thread's share).
 
     Returns ``blk`` (per block of the scan's box of 4^3-voxel blocks: its local block, -1 if not
     touched), ``vloc`` (per local block and voxel in it: the local voxel, -1 if not touched) and
@@ -220,7 +224,7 @@ def _scan_evidence(points, labels, base, order, codes, lo, dims, R, res, ell2, s
     bd2 = ((lo[2] + dims[2] - 1) >> 2) - blo2 + 1
     blk = np.full(bd0 * bd1 * bd2, -1, np.int32)
     w = 2 * R + 1
-    cap = min(n * w * w * w, dims[0] * dims[1] * dims[2])   # bound on the voxels touched
+    cap = max(1, min((t1 - t0) * w * w * w, dims[0] * dims[1] * dims[2]))  # voxels touched, bound
     vloc = np.empty(min(cap, bd0 * bd1 * bd2) * 64, np.int32)
     vcnt = np.empty(cap, np.int64)
     c0 = np.empty(cap, np.int32)
@@ -237,7 +241,7 @@ def _scan_evidence(points, labels, base, order, codes, lo, dims, R, res, ell2, s
     top = table.shape[0] - 1
     deg = table.shape[1] - 1
     last = -1
-    for t in range(n):
+    for t in range(t0, t1):
         i = order[t]
         if codes[i] != last:   # a new voxel of points: its neighbours not looked up yet
             last = codes[i]
@@ -249,7 +253,7 @@ def _scan_evidence(points, labels, base, order, codes, lo, dims, R, res, ell2, s
         for ox in range(-R, R + 1):
             dx = px - (bx + (ox + 0.5)) * res
             sx = dx * dx
-            if not counting and sx >= ell2:
+            if (not counting and sx >= ell2) or bx + ox < x0 or bx + ox >= x1:
                 o += w * w
                 continue
             for oy in range(-R, R + 1):
@@ -421,16 +425,46 @@ def stable_order(keys: np.ndarray, top: int):
     return order, keys[order]
 
 
+def threads() -> int:
+    """Threads of the compiled update: ``HW4_THREADS`` (default 1). The map is the same bit for bit
+    on any number: each thread sums the voxels of its own range of x (whole blocks), over the same
+    points in the same order."""
+    try:
+        return max(1, int(os.environ.get("HW4_THREADS", "1")))
+    except ValueError:
+        return 1
+
+
+_pool = None
+
+
 def scan_evidence(points, labels, base, lo, dims, R: int, resolution: float, ell: float,
-                  sf2: float, counting: bool):
-    """The sparse evidence of one scan's training points (see :func:`_scan_evidence`)."""
+                  sf2: float, counting: bool, n_threads: int | None = None):
+    """The sparse evidence of one scan's training points (see :func:`_scan_evidence`), as a list
+    of parts, one per thread, whose blocks follow each other in key order (x slabs of blocks)."""
+    global _pool
     lo = np.ascontiguousarray(lo, dtype=np.int64)
     dims = np.ascontiguousarray(dims, dtype=np.int64)
     codes = _codes(base, lo, dims)
-    order, _ = stable_order(codes, int(np.prod(dims)) - 1)
-    return _scan_evidence(points, labels, base, order, codes, lo, dims, int(R), float(resolution),
-                          float(ell) ** 2, _PIECES / float(ell), float(sf2), _pieces(),
-                          bool(counting))
+    order, scodes = stable_order(codes, int(np.prod(dims)) - 1)
+    n_threads = threads() if n_threads is None else max(1, int(n_threads))
+    # x ranges of whole blocks, cut at the points' quantiles: [x_0, x_1), [x_1, x_2), ...
+    bx = lo[0] + scodes // (dims[1] * dims[2])          # voxel x of the sorted points
+    cuts = np.unique(np.quantile(bx, np.arange(1, n_threads) / n_threads).astype(np.int64) >> 2) << 2
+    edges = [int(lo[0])] + [int(c) for c in cuts if lo[0] < c < lo[0] + dims[0]] + [int(lo[0] + dims[0])]
+    const = (codes, lo, dims, int(R), float(resolution), float(ell) ** 2, _PIECES / float(ell),
+             float(sf2), _pieces(), bool(counting))
+    jobs = []
+    for x0, x1 in zip(edges[:-1], edges[1:]):
+        t0 = int(np.searchsorted(bx, x0 - R, "left"))   # the points within R voxels of the range
+        t1 = int(np.searchsorted(bx, x1 + R - 1, "right"))
+        jobs.append((points, labels, base, order, t0, t1, x0, x1) + const)
+    if len(jobs) == 1:
+        return [_scan_evidence(*jobs[0])]
+    if _pool is None or _pool._max_workers < len(jobs):
+        from concurrent.futures import ThreadPoolExecutor
+        _pool = ThreadPoolExecutor(len(jobs))
+    return list(_pool.map(lambda a: _scan_evidence(*a), jobs))
 
 
 KERNELS = (_leaf_keys, _group, _lengths, _free_samples, _bases, _codes, _scan_evidence,

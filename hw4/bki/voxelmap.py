@@ -19,7 +19,8 @@ Table and pool grow (by half their size at a time) with the observed volume, nev
 box, and empty voxels cost 4 bytes. A scan's S-BKI sums over all its (training point, voxel) pairs
 run in one order (points in raveled voxel order, per point the offsets in lexicographic order),
 so the map is deterministic. Two engines give the same map bit for bit: ``"compiled"`` (the
-default; :mod:`hw4.bki.compiled`, numba, one thread) and ``"numpy"``, the readable vectorised
+default; :mod:`hw4.bki.compiled`, numba; ``HW4_THREADS`` threads, default 1, the same map on any
+number) and ``"numpy"``, the readable vectorised
 reference (:mod:`hw4.bki.kernel_sums` and the S-CSM counts and merge below), which needs no numba.
 """
 from __future__ import annotations
@@ -137,16 +138,20 @@ class VoxelMap:
         Voxels whose most-likely-class variance exceeds this are unknown.
     engine : {"compiled", "numpy"}
         How a scan's evidence is summed and merged (the same map either way; see the module).
+    threads : int, optional
+        Threads of the compiled engine (default: ``HW4_THREADS``, else 1); the same map bit for
+        bit on any number.
     """
 
     def __init__(self, resolution: float, num_class: int, method: str = "sbki", sf2: float = 10.0,
                  ell: float = 0.3, prior: float = 0.001, var_thresh: float = 0.09,
-                 engine: str = "compiled"):
+                 engine: str = "compiled", threads: int | None = None):
         if method not in METHODS:
             raise InputError(f"unknown method {method!r}; use one of {', '.join(METHODS)}.")
         if engine not in ENGINES:
             raise InputError(f"unknown engine {engine!r}; use one of {', '.join(ENGINES)}.")
         self.engine = engine
+        self.threads = threads   # compiled engine; None: HW4_THREADS (default 1)
         for nm, v in (("resolution", resolution), ("ell", ell), ("sf2", sf2), ("prior", prior)):
             if not (np.isfinite(v) and v > 0):
                 raise InputError(f"{nm} must be a positive number; got {v}.")
@@ -221,20 +226,21 @@ class VoxelMap:
             self._merge(vt, add, cnt, lo, dims)
 
     def _update_compiled(self, points, labels, base, lo, dims, R) -> None:
-        """The compiled engine: the scan's sparse evidence, then its merge into the pool."""
+        """The compiled engine: the scan's sparse evidence (one part per thread, blocks of
+        consecutive x slabs), then its merge into the pool, part after part (key order)."""
         from .compiled import _apply, _count_new, scan_evidence
-        blk, vloc, vcnt, c0, w0, more, ecls, evalue, enext = scan_evidence(
-            np.ascontiguousarray(points), np.ascontiguousarray(labels), base, lo, dims, R,
-            self.resolution, self.ell, self.sf2, self.method == "scsm")
+        parts = scan_evidence(np.ascontiguousarray(points), np.ascontiguousarray(labels), base, lo,
+                              dims, R, self.resolution, self.ell, self.sf2, self.method == "scsm",
+                              self.threads)
         blo = lo >> _SHIFT
         bdims = tuple(int(x) for x in ((lo + dims - 1) >> _SHIFT) - blo + 1)
-        ub = np.flatnonzero(blk >= 0)                  # touched blocks in key order
-        lbs = blk[ub]
-        rows = self._rows_for(_pack(np.column_stack(np.unravel_index(ub, bdims)) + blo))
-        n_new = _count_new(self.table, rows, lbs, vloc)
-        self._reserve(n_new)
-        self.n_voxels = _apply(self.table, rows, lbs, vloc, vcnt, c0, w0, more, ecls, evalue,
-                               enext, self.ev, self.count, self.n_voxels)
+        for blk, vloc, vcnt, c0, w0, more, ecls, evalue, enext in parts:
+            ub = np.flatnonzero(blk >= 0)              # touched blocks in key order
+            lbs = blk[ub]
+            rows = self._rows_for(_pack(np.column_stack(np.unravel_index(ub, bdims)) + blo))
+            self._reserve(_count_new(self.table, rows, lbs, vloc))
+            self.n_voxels = _apply(self.table, rows, lbs, vloc, vcnt, c0, w0, more, ecls, evalue,
+                                   enext, self.ev, self.count, self.n_voxels)
 
     def _reserve(self, n_new: int) -> None:
         """Room in the pool for ``n_new`` more voxels (grown by half its size at a time)."""
