@@ -68,11 +68,39 @@ def fetch_data(args) -> int:
     return 0
 
 
-def run_task(args) -> int:
+def _plotting():
+    """matplotlib (Agg) and the figure code: (pyplot, hw4.core.plotting)."""
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
     from .core import plotting
+    return plt, plotting
+
+
+class _Background:
+    """Run ``fn`` on a daemon thread; ``result()`` waits for it (and raises what it raised)."""
+
+    def __init__(self, fn):
+        import threading
+        self._out = None
+        self._error = None
+        self._thread = threading.Thread(target=self._run, args=(fn,), daemon=True)
+        self._thread.start()
+
+    def _run(self, fn):
+        try:
+            self._out = fn()
+        except BaseException as e:  # handed to the main thread by result()
+            self._error = e
+
+    def result(self):
+        self._thread.join()
+        if self._error is not None:
+            raise self._error
+        return self._out
+
+
+def run_task(args) -> int:
     from .core.atomic import Outputs
     from .tasks import build_map, model_class, task_name
 
@@ -89,6 +117,8 @@ def run_task(args) -> int:
     if not getattr(args, "no_figures", False):
         names += [f"{stem}_mean.png", f"{stem}_variance.png"]
     with Outputs(args.out, names, force=args.force) as out:
+        # matplotlib (a good part of a small run's time) is imported while the map is built
+        figures = _Background(_plotting) if len(names) > 1 else None
         ogm = build_map(args.task, args.grid_size, **kw)
         arrays = dict(cells=ogm.grid.cells, x=ogm.grid.x, y=ogm.grid.y, grid_size=ogm.grid_size,
                       alpha=ogm.map["alpha"], mean=ogm.map["mean"], variance=ogm.map["variance"],
@@ -97,7 +127,8 @@ def run_task(args) -> int:
             arrays["beta"] = ogm.map["beta"]
         np.savez_compressed(out[names[0]], **arrays)
         name = task_name(args.task)
-        if len(names) > 1:
+        if figures is not None:
+            plt, plotting = figures.result()
             for target, draw, what in ((names[1], plotting.plot_map, "mean"),
                                        (names[2], plotting.plot_variance, "variance")):
                 fig, ax = plt.subplots(figsize=(6.4, 5.4))

@@ -23,7 +23,6 @@ from __future__ import annotations
 import os
 
 import numpy as np
-from scipy.spatial import cKDTree
 
 from .errors import InputError
 from .grid import Grid
@@ -37,6 +36,8 @@ MAX_SAMPLE_CHECKS = 2e9    # refuse runs needing more (pair, free sample) or (sa
 MAX_WORK_BYTES = 4 * 2**30  # refuse runs whose per-pose working arrays would exceed this
 COMPILED_FROM = 250_000   # (cell, pose) pairs from which engine='auto' runs the compiled kernels
 BYTES_PER_CHECK = 64       # all-beams working memory per (sample, cell) candidate [bytes]
+BRUTE_KNN = 8_000_000      # (cell, pose) distances up to which nearest_pose_query compares all
+KNN_CHUNK = 128            # cells per chunk of that comparison
 
 
 def _refuse_heavy(grid, poses, table, model, beams, nearest_poses, l, step) -> None:
@@ -258,6 +259,43 @@ def count_evidence(grid: Grid, poses, scans, *, model: str = "discrete", semanti
     return acc.reshape(grid.n_cells, n_classes)
 
 
+def nearest_pose_query(cells, pose_xy, k: int) -> np.ndarray:
+    """(n_cells, k) int: the ``k`` nearest poses [m] of every cell centre [m] (world frame),
+    nearest first, as ``scipy.spatial.cKDTree(pose_xy).query(cells, k)`` gives them.
+
+    Up to ``BRUTE_KNN`` (cell, pose) pairs (small maps) every squared distance
+    ``(cx - px)**2 + (cy - py)**2`` is compared, as the KD-tree compares them, and cells with
+    two equal distances among their first k + 1 are asked of the KD-tree; so the answer is the
+    KD-tree's, and small runs never import scipy.spatial (a third of a second). Larger maps ask
+    the KD-tree for every cell.
+    """
+    cells = np.asarray(cells, dtype=float)
+    pose_xy = np.asarray(pose_xy, dtype=float)
+    n = len(pose_xy)
+    k = min(int(k), n)
+    if len(cells) * n > BRUTE_KNN:
+        from scipy.spatial import cKDTree
+        _, nn = cKDTree(pose_xy).query(cells, k=k, workers=2)
+        return np.reshape(nn, (-1, k))
+    m = min(k + 1, n)
+    nn = np.empty((len(cells), k), np.int64)
+    tie = np.zeros(len(cells), bool)
+    for a in range(0, len(cells), KNN_CHUNK):  # chunks of cells whose distances stay in cache
+        c = cells[a:a + KNN_CHUNK]
+        d2 = (c[:, None, 0] - pose_xy[None, :, 0]) ** 2 + (c[:, None, 1] - pose_xy[None, :, 1]) ** 2
+        part = np.argpartition(d2, m - 1, axis=1)[:, :m] if m < n else np.tile(np.arange(n), (len(c), 1))
+        dp = np.take_along_axis(d2, part, axis=1)
+        order = np.argsort(dp, axis=1, kind="stable")
+        ds = np.take_along_axis(dp, order, axis=1)
+        nn[a:a + len(c)] = np.take_along_axis(part, order, axis=1)[:, :k]
+        tie[a:a + len(c)] = np.any(ds[:, 1:] == ds[:, :-1], axis=1)
+    if tie.any():  # the KD-tree's order among equal distances
+        from scipy.spatial import cKDTree
+        _, nt = cKDTree(pose_xy).query(cells[tie], k=k)
+        nn[tie] = np.reshape(nt, (-1, k))
+    return nn
+
+
 def _pairs(grid, poses, nearest_poses, z_max, progress, reach=None):
     """Yield blocks of (cell, pose, r, phi) for the poses each cell considers, inside the field.
 
@@ -267,20 +305,19 @@ def _pairs(grid, poses, nearest_poses, z_max, progress, reach=None):
     n_poses = len(poses)
     per_cell = n_poses if nearest_poses is None else min(nearest_poses, n_poses)
     block = max(1, PAIRS_PER_BLOCK // per_cell)
-    tree = cKDTree(poses[:, :2]) if nearest_poses is not None else None
+    knn = nearest_pose_query(cells, poses[:, :2], per_cell) if nearest_poses is not None else None
     starts = range(0, len(cells), block)
     if progress and len(starts) > 1:
         from tqdm import tqdm
         starts = tqdm(starts, desc="cells", unit="block", leave=False)
     for s in starts:
         idx = np.arange(s, min(s + block, len(cells)))
-        if tree is not None:
-            _, nn = tree.query(cells[idx], k=per_cell, workers=2)
-            pose = nn.reshape(-1)
+        if knn is not None:
+            pose = knn[idx].reshape(-1)
         else:
             pose = np.tile(np.arange(n_poses), len(idx))
         cell = np.repeat(idx, per_cell)
-        if reach is not None and tree is None:  # all poses: most pairs are out of reach
+        if reach is not None and knn is None:  # all poses: most pairs are out of reach
             near = ((cells[cell, 0] - poses[pose, 0]) ** 2 + (cells[cell, 1] - poses[pose, 1]) ** 2
                     < reach[pose] ** 2)
             cell, pose = cell[near], pose[near]
@@ -365,8 +402,7 @@ def _all_beams(grid, poses, table, cls_hit, free, add, nearest_poses, z_max, sig
     n_poses, n_cells = len(poses), grid.n_cells
     selected = None
     if nearest_poses is not None:
-        _, nn = cKDTree(poses[:, :2]).query(grid.cells, k=min(nearest_poses, n_poses), workers=2)
-        nn = nn.reshape(n_cells, -1)
+        nn = nearest_pose_query(grid.cells, poses[:, :2], nearest_poses)
         order = np.argsort(nn.reshape(-1), kind="stable")
         by_pose = (order // nn.shape[1])  # cells, grouped by the pose they consider
         bounds = np.searchsorted(nn.reshape(-1)[order], np.arange(n_poses + 1))

@@ -106,12 +106,18 @@ class BeamTable:
         # L = (bearings in lower bins) plus one if the next sorted bearing is below phi: exact.
         # Poses with two bearings in one bin use binary search instead.
         n_poses = len(self.first) - 1
+        self._bin_table = None
         if compiled:
             from .compiled import bin_table
-            self._bin_lo, self._dense = bin_table(self.bearings[self._sorted], self._seg_start,
-                                                  self._seg_len, BINS)
-        else:
-            self._bin_lo, self._dense = self._bins(n_poses)
+            self._bin_table, self._dense = bin_table(self.bearings[self._sorted], self._seg_start,
+                                                     self._seg_len, BINS)
+        else:  # the table itself only when asked for (_bin_lo): lookups search the bin keys
+            pose_s = self.pose_of[self._sorted]
+            self._bin_key = pose_s * BINS + _bin(self.bearings[self._sorted])  # ascending
+            same = np.zeros(n_poses, dtype=bool)
+            two = self._bin_key[1:] == self._bin_key[:-1]  # two bearings of one pose in one bin
+            same[pose_s[1:][two]] = True
+            self._dense = same
         self._sorted_bearing = np.append(self.bearings[self._sorted], np.inf)
         if np.all(self._seg_len > 0):  # a pose's sorted bearings: its smallest first, largest last
             self.bearing_min = self._sorted_bearing[self._seg_start]
@@ -121,6 +127,20 @@ class BeamTable:
             self.bearing_max = np.full(n_poses, -np.inf)
             np.minimum.at(self.bearing_min, self.pose_of, self.bearings)
             np.maximum.at(self.bearing_max, self.pose_of, self.bearings)
+
+    @property
+    def _bin_lo(self) -> np.ndarray:
+        """(T, BINS) int32: per pose and bearing bin, the pose's sorted bearings in lower bins."""
+        if self._bin_table is None:
+            self._bin_table, _ = self._bins(len(self.first) - 1)
+        return self._bin_table
+
+    def _lower(self, pose_idx, b) -> np.ndarray:
+        """``_bin_lo[pose_idx, b]``, from the table when built, else by searching the bin keys
+        (the count of the pose's sorted bearings with a key below ``pose * BINS + b``)."""
+        if self._bin_table is not None:
+            return self._bin_lo[pose_idx, b]
+        return np.searchsorted(self._bin_key, pose_idx * BINS + b) - self._seg_start[pose_idx]
 
     def _bins(self, n_poses: int) -> tuple:
         """(T, BINS) int32 bearings of the pose in lower bins, and (T,) bool: a bin holds two."""
@@ -179,7 +199,7 @@ class BeamTable:
             pos = np.searchsorted(self._key, pose_idx * 8.0 + phi) - start
             offsets = (-2, -1, 0, 1)
         else:  # exact position from the bin table: its two neighbours are the candidates
-            pos = self._bin_lo[pose_idx, _bin(phi)]
+            pos = self._lower(pose_idx, _bin(phi))
             nxt = np.minimum(pos, n - 1)
             pos = pos + ((pos < n) & (self._sorted_bearing[start + nxt] < phi))
             offsets = (-1, 0)
