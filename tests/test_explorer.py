@@ -185,6 +185,7 @@ def test_explorer_click_picks_the_cell_and_tabulates_its_evidence():
                                None)           # what ipyevents calls for the browser's click
     i = ex.cell_at(e.ogm, x, y)
     assert e.evidence.cell == i
+    assert (e.x.value, e.y.value) == (x, y)     # the cell sliders show the picked centre
     alpha, beta = e.ogm.map["alpha"][i, 0], e.ogm.map["beta"][i, 0]
     assert alpha > 0.3 and beta > 0.3
     np.testing.assert_allclose(e.ogm.prior_alpha + e.evidence.totals(), [alpha, beta], rtol=RTOL)

@@ -359,11 +359,13 @@ class Explorer:
     # --- picking a cell
 
     def select(self, x: float, y: float):
-        """Pick the cell nearest to the world point (x, y) [m] (as a click there does)."""
+        """Pick the cell nearest to the world point (x, y) [m] (as a click there does); the cell
+        sliders move to its centre."""
+        cx, cy = self.ogm.grid.cells[cell_at(self.ogm, x, y)]
         self._hold = True
         try:
-            self.x.value = float(np.clip(round(x / 0.05) * 0.05, self.x.min, self.x.max))
-            self.y.value = float(np.clip(round(y / 0.05) * 0.05, self.y.min, self.y.max))
+            self.x.value = float(np.clip(cx, self.x.min, self.x.max))
+            self.y.value = float(np.clip(cy, self.y.min, self.y.max))
         finally:
             self._hold = False
         self.redraw(rebuild=False)
