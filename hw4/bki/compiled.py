@@ -207,7 +207,7 @@ def _codes(base, lo, dims):  # pragma: no cover - compiled
 
 @njit(cache=True, nogil=True)
 def _scan_evidence(points, labels, base, order, t0, t1, x0, x1, codes, lo, dims, R, res, ell2,
-                   scale, sf2, table, counting):  # pragma: no cover - compiled
+                   scale, sf2, table, counting, dense_k):  # pragma: no cover - compiled
     """Per-scan evidence in a sparse form. The points ``order[t0:t1]`` are visited in that order
     (raveled voxel order, stable), per point the offsets in lexicographic order; ``counting``
     (S-CSM): every point adds 1 to its own voxel (``R`` = 0), else the kernel weight to every
@@ -216,7 +216,9 @@ def _scan_evidence(points, labels, base, order, t0, t1, x0, x1, codes, lo, dims,
     Returns ``blk`` (per block of the scan's box of 4^3-voxel blocks: its local block, -1 if not
     touched), ``vloc`` (per local block and voxel in it: the local voxel, -1 if not touched) and
     per local voxel its pair count ``vcnt``, first class ``c0`` and its summed weight ``w0`` and
-    the head ``more`` of a list of further (class ``ecls``, sum ``evalue``, next ``enext``)."""
+    the head ``more`` of a list of further (class ``ecls``, sum ``evalue``, next ``enext``).
+    With ``dense_k`` > 0 (few classes), the sums are kept per local voxel and class in ``acc``
+    (``dense_k`` per voxel, from 0) instead, and ``c0``, ``w0``, ``more`` and the list are empty."""
     n = points.shape[0]
     blo0, blo1, blo2 = lo[0] >> 2, lo[1] >> 2, lo[2] >> 2
     bd0 = ((lo[0] + dims[0] - 1) >> 2) - blo0 + 1
@@ -230,6 +232,7 @@ def _scan_evidence(points, labels, base, order, t0, t1, x0, x1, codes, lo, dims,
     c0 = np.empty(cap, np.int32)
     w0 = np.empty(cap)
     more = np.empty(cap, np.int32)
+    acc = np.empty(cap * dense_k)
     ecap = 1024
     ecls = np.empty(ecap, np.int32)
     evalue = np.empty(ecap)
@@ -305,9 +308,14 @@ def _scan_evidence(points, labels, base, order, t0, t1, x0, x1, codes, lo, dims,
                             c0[v] = c
                             w0[v] = 0.0
                             more[v] = -1
+                            for q in range(dense_k):
+                                acc[v * dense_k + q] = 0.0
                             nv += 1
                         near[o] = v
                     vcnt[v] += 1
+                    if dense_k:
+                        acc[v * dense_k + c] += k
+                        continue
                     if c0[v] == c:
                         w0[v] += k
                         continue
@@ -333,8 +341,12 @@ def _scan_evidence(points, labels, base, order, t0, t1, x0, x1, codes, lo, dims,
                         more[v] = e
                         ne += 1
                     evalue[e] += k
-    return (blk, vloc[:nb * 64], vcnt[:nv], c0[:nv], w0[:nv], more[:nv], ecls[:ne], evalue[:ne],
-            enext[:ne])
+    if dense_k:
+        nc = 0
+    else:
+        nc = nv
+    return (blk, vloc[:nb * 64], vcnt[:nv], c0[:nc], w0[:nc], more[:nc], ecls[:ne], evalue[:ne],
+            enext[:ne], acc[:nv * dense_k])
 
 
 @njit(cache=True, nogil=True)
@@ -351,7 +363,7 @@ def _count_new(table, rows, lbs, vloc):  # pragma: no cover - compiled
 
 
 @njit(cache=True, nogil=True)
-def _apply(table, rows, lbs, vloc, vcnt, c0, w0, more, ecls, evalue, enext, ev, count,
+def _apply(table, rows, lbs, vloc, vcnt, c0, w0, more, ecls, evalue, enext, acc, ev, count,
            n_voxels):  # pragma: no cover - compiled
     """Add the scan's evidence to the map's pool; new voxels take the next slots in (block key,
     voxel) order. Returns the new number of voxels."""
@@ -368,6 +380,11 @@ def _apply(table, rows, lbs, vloc, vcnt, c0, w0, more, ecls, evalue, enext, ev, 
                 table[row, q] = s
                 n_voxels += 1
             count[s] += vcnt[v]
+            if acc.shape[0]:   # dense sums: every class (adding a 0 leaves a value as it is)
+                K = ev.shape[1]
+                for q in range(K):
+                    ev[s, q] += acc[v * K + q]
+                continue
             ev[s, c0[v]] += w0[v]
             e = more[v]
             while e >= 0:
@@ -438,8 +455,14 @@ def threads() -> int:
 _pool = None
 
 
+DENSE_CLASSES = 8
+"""Up to this many classes the compiled update sums a scan's evidence per voxel and class in a
+dense array (no per-pair search of the class); beyond, the first class of each voxel inline and
+a list for the others (a voxel rarely sees more than one or two of 20 classes)."""
+
+
 def scan_evidence(points, labels, base, lo, dims, R: int, resolution: float, ell: float,
-                  sf2: float, counting: bool, n_threads: int | None = None):
+                  sf2: float, counting: bool, n_threads: int | None = None, num_class: int = 0):
     """The sparse evidence of one scan's training points (see :func:`_scan_evidence`), as a list
     of parts, one per thread, whose blocks follow each other in key order (x slabs of blocks)."""
     global _pool
@@ -453,7 +476,8 @@ def scan_evidence(points, labels, base, lo, dims, R: int, resolution: float, ell
     cuts = np.unique(np.quantile(bx, np.arange(1, n_threads) / n_threads).astype(np.int64) >> 2) << 2
     edges = [int(lo[0])] + [int(c) for c in cuts if lo[0] < c < lo[0] + dims[0]] + [int(lo[0] + dims[0])]
     const = (codes, lo, dims, int(R), float(resolution), float(ell) ** 2, _PIECES / float(ell),
-             float(sf2), _pieces(), bool(counting))
+             float(sf2), _pieces(), bool(counting),
+             int(num_class) if 0 < num_class <= DENSE_CLASSES else 0)
     jobs = []
     for x0, x1 in zip(edges[:-1], edges[1:]):
         t0 = int(np.searchsorted(bx, x0 - R, "left"))   # the points within R voxels of the range

@@ -231,16 +231,16 @@ class VoxelMap:
         from .compiled import _apply, _count_new, scan_evidence
         parts = scan_evidence(np.ascontiguousarray(points), np.ascontiguousarray(labels), base, lo,
                               dims, R, self.resolution, self.ell, self.sf2, self.method == "scsm",
-                              self.threads)
+                              self.threads, self.num_class)
         blo = lo >> _SHIFT
         bdims = tuple(int(x) for x in ((lo + dims - 1) >> _SHIFT) - blo + 1)
-        for blk, vloc, vcnt, c0, w0, more, ecls, evalue, enext in parts:
+        for blk, vloc, vcnt, c0, w0, more, ecls, evalue, enext, acc in parts:
             ub = np.flatnonzero(blk >= 0)              # touched blocks in key order
             lbs = blk[ub]
             rows = self._rows_for(_pack(np.column_stack(np.unravel_index(ub, bdims)) + blo))
             self._reserve(_count_new(self.table, rows, lbs, vloc))
             self.n_voxels = _apply(self.table, rows, lbs, vloc, vcnt, c0, w0, more, ecls, evalue,
-                                   enext, self.ev, self.count, self.n_voxels)
+                                   enext, acc, self.ev, self.count, self.n_voxels)
 
     def _reserve(self, n_new: int) -> None:
         """Room in the pool for ``n_new`` more voxels (grown by half its size at a time)."""
