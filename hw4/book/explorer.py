@@ -22,7 +22,11 @@ In a notebook::
     from hw4.book.explorer import Explorer
     Explorer(task=2)            # task=4: the continuous S-CSM, with its class counts
 
-A still for the static book is written by ``python -m hw4.book.explorer --task 2 --still FILE``.
+``python -m hw4.book.explorer --task 2 --still FILE`` writes the figure the explorer shows at its
+start as a PNG. The stills of the static book (``notebooks/_static/t2_explorer.png``,
+``t4_explorer.png``) are screenshots of the explorer live in Notebook 7 (headless Chromium
+through selenium, after a click on the cell at (-9, -18.5) m), so that they show the sliders and
+the evidence table as a reader sees them.
 """
 from __future__ import annotations
 
