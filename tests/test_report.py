@@ -66,8 +66,8 @@ def test_glued_values_are_the_books_byte_for_byte(sources):
         # values quoted from another chapter are that chapter's record
         borrowed = set(rep) - set(books[task])
         assert all(rep[k] == everything[k] for k in borrowed)
-        if task == 4:
-            assert "t3_same_geometry_pct" in borrowed
+        if task == 3:
+            assert "t1_occupied_cells" in borrowed   # Task 3 quotes Task 1's occupied cells
 
 
 def test_title_page_names_the_student(sources):
@@ -116,7 +116,7 @@ def test_the_reports_own_caption_replaces_the_chapters(sources, tmp_path):
         marks = report.MARK.findall(text)
         assert len(re.findall(r"^<!-- caption$", text, re.M)) == len(marks), f"task{task}.md"
     fig = report.figure_cells(_nb(out / "task1.ipynb"))["fig-t1-map"]
-    assert fig["metadata"]["mystnb"]["figure"]["caption"].startswith("Discrete CSM of the Intel")
+    assert fig["metadata"]["mystnb"]["figure"]["caption"].startswith("Task 1's map: the discrete CSM")
     assert "{eq}" not in fig["metadata"]["mystnb"]["figure"]["caption"]
     # a Markdown {figure} block keeps its options and takes the report's caption
     texts = tmp_path / "texts"
@@ -173,11 +173,72 @@ def test_report_builds_with_the_name_every_figure_and_no_build_details(sources):
     text = subprocess.run(["pdftotext", str(pdf), "-"], capture_output=True, text=True).stdout
     bad = sorted({m.group(0) for m in FORBIDDEN.finditer(text)})
     assert not bad, f"build details in the report's text: {bad}"
-    flat = re.sub(r"\s+", " ", re.sub(r"-\n", "", text))
-    sentences = [s.strip() for s in re.split(r"(?<=[.:;])\s+(?=[A-Z])", flat)
-                 if len(s.strip()) > 60]
+    sentences = report_sentences(text)
     twice = sorted({s for s in sentences if sentences.count(s) > 1})
     assert not twice, f"sentences printed twice: {twice}"
+    near = near_repeats(sentences)
+    assert not near, "sentences that nearly repeat another:\n" + "\n".join(
+        f"{share:.2f}: {a[:120]!r} / {b[:120]!r}" for share, a, b in near)
+
+
+RUNNING_HEAD = "NA 568 Mobile Robotics, Homework 4: Mapping"
+
+
+def report_sentences(text: str) -> list[str]:
+    """The sentences (over 60 characters) of the report's text as pdftotext gives it, without
+    the running head and the page numbers (which would join a page's last and next sentence)."""
+    lines = [ln for ln in text.replace("\f", "\n").split("\n")
+             if ln.strip() != RUNNING_HEAD and not re.fullmatch(r"\s*\d+\s*", ln)]
+    flat = re.sub(r"\s+", " ", re.sub(r"-\n", "", "\n".join(lines)))
+    return [s.strip() for s in re.split(r"(?<=[.:;])\s+(?=[A-Z(])", flat) if len(s.strip()) > 60]
+
+
+def _bigrams(sentence: str) -> set:
+    words = re.findall(r"[a-z0-9]+(?:[.'’][a-z0-9]+)*", sentence.lower())
+    return set(zip(words, words[1:]))
+
+
+def near_repeats(sentences, share: float = 0.5, least: int = 10) -> list:
+    """Pairs of sentences of which one nearly repeats the other: at least ``least`` of their
+    word pairs in common, and those at least ``share`` of the shorter one's. A sentence
+    restated in other words ("read as free against some region ... 98.4 %" in two tasks) or two
+    captions differing only in a number are caught; sentences that merely use the report's
+    terms are not (``test_near_repeats_*``)."""
+    grams = [_bigrams(s) for s in sentences]
+    out = []
+    for i, a in enumerate(grams):
+        for j in range(i + 1, len(grams)):
+            b = grams[j]
+            common = len(a & b)
+            if common >= least and common >= share * min(len(a), len(b)):
+                out.append((common / min(len(a), len(b)), sentences[i], sentences[j]))
+    return out
+
+
+def test_near_repeats_catch_a_restated_sentence_and_twin_captions():
+    restated = ["Read as \u201cfree\u201d against \u201csome region\u201d, the map agrees with Task 1\u2019s "
+                "occupancy map on 98.4 % of the observed cells, since the counts are the same.",
+                "Read as free against \u201csome region\u201d it is almost Task 1\u2019s occupancy map "
+                "(Task 3: the two agree on 98.4 % of the observed cells), so one map serves both "
+                "geometry and semantics."]
+    assert len(near_repeats(restated)) == 1
+    twins = [f"Continuous CSM at grid size {g} m, the observed part of the building. Left: "
+             "occupancy probability (white free, black occupied); right: variance on the scale "
+             "of Fig. 2.2; light grey: no evidence." for g in ("0.27", "0.5")]
+    assert len(near_repeats(twins)) == 1
+    # the report's own terms in two different statements are not a repeat
+    apart = ["The variance of the winning class is low in free space, where many "
+             "pass-throughs agree, and higher on region cells of the map.",
+             "Class probabilities and the variance of the most likely class are those of Task 3, "
+             "with the counts of the continuous model in place of the discrete ones."]
+    assert near_repeats(apart) == []
+
+
+def test_report_sentences_drop_the_running_head_and_page_numbers():
+    text = ("The last sentence of a page runs on\n\n3\n\f" + RUNNING_HEAD +
+            "\n\nto the next page and ends here, well past sixty characters in all.\n")
+    assert report_sentences(text) == ["The last sentence of a page runs on to the next page and "
+                                      "ends here, well past sixty characters in all."]
 
 
 def test_markers_pick_figures_by_name_pattern_and_fallback():
@@ -215,3 +276,34 @@ def test_held_out_free_points_as_the_evaluation_places_them():
     text = " ".join((Path(__file__).resolve().parents[1] / "report" / "task2.md").read_text().split())
     assert (f"points every {evaluate.FREE_STEP:g} m along their beams, stopping "
             f"{evaluate.FREE_MARGIN:g} m short of the end point") in text
+
+
+def test_region_change_share_counts_region_cells_only():
+    """Task 4B's "cells that change region" is a share of the fine map's region cells (and of
+    those the coarse map still calls a region), not of every observed cell."""
+    import numpy as np
+    from hw4.core.grid import Grid
+    from hw4.evaluation import stats
+
+    grid = Grid(0.5, (0.0, 1.0), (0.0, 1.0))   # 3 x 3 cells, centres 0, 0.5, 1 [m]
+    assert grid.n_cells == 9
+    fine = np.zeros((9, 3))           # two regions and free space (last)
+    fine[[1, 4]] = (2, 0, 0)          # region 0
+    fine[2] = (0, 2, 0)               # region 1
+    fine[[3, 5, 7]] = (0, 0, 3)       # free; cells 0 and 8 without evidence
+    fine[6] = (0, 3, 0)               # region 1, without evidence in the other map
+    other = np.zeros((9, 3))
+    other[1] = (0, 2, 0)              # region 0 -> region 1: swapped
+    other[2] = (0, 0, 2)              # region 1 -> free
+    other[4] = (2, 0, 0)              # kept, same region
+    other[3] = (2, 0, 0)              # free -> region: not a region cell of the fine map
+    other[[5, 7]] = (0, 0, 1)         # free, unchanged; cell 6 unknown in the other map
+    a = stats.from_counts(grid, fine, semantic=True)
+    b = stats.from_counts(grid, other, semantic=True)
+    ch = stats.compare_labels(a, b)
+    assert (ch.compared, ch.changed) == (6, 3)
+    assert (ch.region_compared, ch.region_kept, ch.region_swapped) == (3, 2, 1)
+    assert ch.share_swapped == 1 / 3 and ch.share_swapped_kept == 1 / 2
+    assert ch.share_swapped != ch.region_swapped / ch.compared   # not over every cell
+    same = stats.compare_labels(a, a)
+    assert same.region_swapped == 0 and same.region_kept == same.region_compared == 4
