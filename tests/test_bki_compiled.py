@@ -231,3 +231,30 @@ def test_the_map_is_the_same_on_any_number_of_threads(method, res, K):
 def _box(pts, res):
     base, bmin, bmax = compiled.bases(np.ascontiguousarray(pts), res)
     return base, bmin - 1, bmax + 1 - (bmin - 1) + 1
+
+
+def test_the_compiling_notice_only_on_a_terminal_and_only_when_not_cached(monkeypatch, capsys):
+    import io
+    import os
+
+    class Tty(io.StringIO):
+        def isatty(self):
+            return True
+
+    compiled.downsample(np.zeros((2, 3)), None, 0.1)             # every kernel is cached by now
+    compiled.scan_evidence(np.zeros((1, 3)), np.zeros(1, np.int64), *_box(np.zeros((1, 3)), 0.1),
+                           1, 0.1, 0.3, 10.0, False)
+    for stale, want in ((False, ""), (True, "hw4: compiling the 3D mapping kernels")):
+        err = Tty()
+        monkeypatch.setattr("sys.stderr", err)
+        monkeypatch.setattr(compiled, "_announced", False)
+        if stale:   # the source newer than numba's cache index, as after an install or a change
+            later = os.path.getmtime(compiled.__file__) + 3600
+            monkeypatch.setattr(os.path, "getmtime",
+                                lambda p, real=os.path.getmtime: later if p == compiled.__file__ else real(p))
+        compiled.bases(np.zeros((1, 3)), 0.1)
+        assert err.getvalue().startswith(want) and (want or err.getvalue() == "")
+    monkeypatch.setattr(compiled, "_announced", False)
+    monkeypatch.setattr("sys.stderr", io.StringIO())             # not a terminal: silent
+    compiled.bases(np.zeros((1, 3)), 0.1)
+    assert compiled._announced

@@ -28,6 +28,7 @@ threads. Units: metres, world frame; voxel ``i = floor(x / r)``, centre ``(i + 0
 from __future__ import annotations
 
 import os
+import sys
 
 import numpy as np
 from numba import njit
@@ -399,6 +400,7 @@ def _apply(table, rows, lbs, vloc, vcnt, c0, w0, more, ecls, evalue, enext, acc,
 def downsample(points: np.ndarray, labels, size: float, num_labels: int = 0):
     """Compiled :func:`hw4.bki.training.downsample` for ``size > 0``: ``(centroids, majority or
     None, far)``; ``far`` when a leaf index lies beyond +-2^20 (the caller raises its error)."""
+    _announce()
     points = np.ascontiguousarray(points, dtype=np.float64)
     if labels is None:
         lab, k = np.zeros(0, np.int64), 1
@@ -427,7 +429,34 @@ def free_samples(hits: np.ndarray, origin: np.ndarray, length: np.ndarray, fr: f
 
 def bases(points: np.ndarray, resolution: float):
     """``(floor(points / resolution), its minimum, its maximum)`` per axis, int64."""
+    _announce()
     return _bases(points, float(resolution))
+
+
+_announced = False
+
+
+def _announce() -> None:
+    """Before the first compiled call of a process: when numba's cache does not hold every kernel
+    for this source (the first run after an install or a change), say so once on stderr, when it
+    is a terminal (notebooks and piped runs keep their outputs)."""
+    global _announced
+    if _announced:
+        return
+    _announced = True
+    if not getattr(sys.stderr, "isatty", lambda: False)():
+        return
+    for k in KERNELS:
+        try:
+            index = k._cache._cache_file._index_path
+            if not (os.path.exists(index) and os.path.getmtime(index) >= os.path.getmtime(__file__)):
+                break
+        except (AttributeError, OSError):
+            break
+    else:
+        return
+    print("hw4: compiling the 3D mapping kernels (once after an install; 20-60 s) ...",
+          file=sys.stderr, flush=True)
 
 
 def stable_order(keys: np.ndarray, top: int):
