@@ -22,7 +22,7 @@ import numpy as np
 
 from ..core.kernel import sparse_kernel_pieces
 
-CHUNK = 4096  # points per vectorised step (about 1 MB of temporaries per array at R = 1)
+PAIRS_PER_STEP = 1 << 17  # candidate (point, voxel) pairs per vectorised step (1 MB per array)
 
 
 def kernel_sums(points: np.ndarray, labels: np.ndarray, base: np.ndarray, lo: np.ndarray,
@@ -56,8 +56,9 @@ def kernel_sums(points: np.ndarray, labels: np.ndarray, base: np.ndarray, lo: np
     half = off + 0.5
     stride = np.array([dims[1] * dims[2], dims[2], 1], np.int64)
     codes, cls, d2s = [], [], []
-    for s in range(0, len(points), CHUNK):
-        p, b = points[s:s + CHUNK], base[s:s + CHUNK]
+    step = max(64, PAIRS_PER_STEP // len(off) ** 3)   # points per step
+    for s in range(0, len(points), step):
+        p, b = points[s:s + step], base[s:s + step]
         dx = [p[:, a, None] - (b[:, a, None] + half) * resolution for a in range(3)]
         sq = [d * d for d in dx]
         d2 = (sq[0][:, :, None, None] + sq[1][:, None, :, None]) + sq[2][:, None, None, :]
