@@ -210,7 +210,9 @@ def _codes(base, lo, dims):  # pragma: no cover - compiled
 def _scan_evidence(points, labels, base, order, t0, t1, x0, x1, codes, lo, dims, R, res, ell2,
                    scale, sf2, table, counting, dense_k):  # pragma: no cover - compiled
     """Per-scan evidence in a sparse form. The points ``order[t0:t1]`` are visited in that order
-    (raveled voxel order, stable), per point the offsets in lexicographic order; ``counting``
+    (raveled voxel order, stable), per point the offsets in lexicographic order (for ``R >= 2``
+    all ``(2R + 1)^3`` distances are taken and those below ell kept without a branch per offset;
+    the same pairs, distances and order); ``counting``
     (S-CSM): every point adds 1 to its own voxel (``R`` = 0), else the kernel weight to every
     voxel within ell. Only voxels with x index in ``[x0, x1)`` are summed (a thread's share).
 
@@ -244,6 +246,13 @@ def _scan_evidence(points, labels, base, order, t0, t1, x0, x1, codes, lo, dims,
     ne = 0
     top = table.shape[0] - 1
     deg = table.shape[1] - 1
+    # per point: the offsets o (lexicographic index) within ell and their kernel weights
+    m_o = np.empty(w * w * w, np.int64)
+    m_d2 = np.empty(w * w * w)
+    m_k = np.empty(w * w * w)
+    sxa = np.empty(w)
+    sya = np.empty(w)
+    sza = np.empty(w)
     last = -1
     for t in range(t0, t1):
         i = order[t]
@@ -253,95 +262,128 @@ def _scan_evidence(points, labels, base, order, t0, t1, x0, x1, codes, lo, dims,
         px, py, pz = points[i, 0], points[i, 1], points[i, 2]
         bx, by, bz = base[i, 0], base[i, 1], base[i, 2]
         c = labels[i]
-        o = -1
-        for ox in range(-R, R + 1):
-            dx = px - (bx + (ox + 0.5)) * res
-            sx = dx * dx
-            if (not counting and sx >= ell2) or bx + ox < x0 or bx + ox >= x1:
-                o += w * w
-                continue
-            for oy in range(-R, R + 1):
-                dy = py - (by + (oy + 0.5)) * res
-                sxy = sx + dy * dy
-                if not counting and sxy >= ell2:
-                    o += w
+        m = 0
+        if counting:   # the point's own voxel (R = 0), when it is in this share
+            m_o[0] = 0
+            m_k[0] = 1.0
+            m = 1 if x0 <= bx < x1 else 0
+        elif R <= 1:   # few offsets: test them one by one, skipping rows out of reach
+            o = -1
+            for ox in range(-R, R + 1):
+                dx = px - (bx + (ox + 0.5)) * res
+                sx = dx * dx
+                if sx >= ell2 or bx + ox < x0 or bx + ox >= x1:
+                    o += w * w
                     continue
-                for oz in range(-R, R + 1):
-                    o += 1
-                    if counting:
-                        k = 1.0
-                    else:
+                for oy in range(-R, R + 1):
+                    dy = py - (by + (oy + 0.5)) * res
+                    sxy = sx + dy * dy
+                    if sxy >= ell2:
+                        o += w
+                        continue
+                    for oz in range(-R, R + 1):
+                        o += 1
                         dz = pz - (bz + (oz + 0.5)) * res
                         d2 = sxy + dz * dz
-                        if d2 >= ell2:
-                            continue
-                        # the kernel's piece j and u = x P - j - 1/2, as sparse_kernel_pieces
-                        r = np.sqrt(d2) * scale
-                        j = int(r)
-                        if j > top:
-                            j = top
-                        u = r - j
-                        u -= 0.5
-                        k = table[j, deg] * u
-                        for q in range(deg - 1, 0, -1):
-                            k += table[j, q]
-                            k *= u
-                        k += table[j, 0]
-                        k *= sf2
-                        if k < 0.0:
-                            k = 0.0
-                    v = near[o]
-                    if v < 0:
-                        vx, vy, vz = bx + ox, by + oy, bz + oz
-                        bc = (((vx >> 2) - blo0) * bd1 + ((vy >> 2) - blo1)) * bd2 + ((vz >> 2) - blo2)
-                        lb = blk[bc]
-                        if lb < 0:
-                            lb = nb
-                            blk[bc] = lb
-                            vloc[lb * 64: lb * 64 + 64] = -1
-                            nb += 1
-                        li = lb * 64 + (((vx & 3) << 4) | ((vy & 3) << 2) | (vz & 3))
-                        v = vloc[li]
-                        if v < 0:
-                            v = nv
-                            vloc[li] = v
-                            vcnt[v] = 0
-                            c0[v] = c
-                            w0[v] = 0.0
-                            more[v] = -1
-                            for q in range(dense_k):
-                                acc[v * dense_k + q] = 0.0
-                            nv += 1
-                        near[o] = v
-                    vcnt[v] += 1
-                    if dense_k:
-                        acc[v * dense_k + c] += k
-                        continue
-                    if c0[v] == c:
-                        w0[v] += k
-                        continue
-                    e = more[v]
-                    while e >= 0 and ecls[e] != c:
-                        e = enext[e]
-                    if e < 0:
-                        if ne == ecap:
-                            ecap *= 2
-                            g = np.empty(ecap, np.int32)
-                            g[:ne] = ecls[:ne]
-                            ecls = g
-                            g = np.empty(ecap, np.int32)
-                            g[:ne] = enext[:ne]
-                            enext = g
-                            f = np.empty(ecap)
-                            f[:ne] = evalue[:ne]
-                            evalue = f
-                        e = ne
-                        ecls[e] = c
-                        evalue[e] = 0.0
-                        enext[e] = more[v]
-                        more[v] = e
-                        ne += 1
-                    evalue[e] += k
+                        if d2 < ell2:
+                            m_o[m] = o
+                            m_d2[m] = d2
+                            m += 1
+        else:          # many offsets: every distance, the ones within ell kept without branches
+            for q in range(w):
+                dx = px - (bx + ((q - R) + 0.5)) * res
+                sxa[q] = dx * dx
+                dy = py - (by + ((q - R) + 0.5)) * res
+                sya[q] = dy * dy
+                dz = pz - (bz + ((q - R) + 0.5)) * res
+                sza[q] = dz * dz
+            o = 0
+            for qa in range(w):
+                inside = bx + qa - R >= x0 and bx + qa - R < x1
+                for qb in range(w):
+                    sxy = sxa[qa] + sya[qb]
+                    for qc in range(w):
+                        d2 = sxy + sza[qc]
+                        m_o[m] = o
+                        m_d2[m] = d2
+                        m += (d2 < ell2) and inside
+                        o += 1
+        if not counting:
+            for q in range(m):
+                # the kernel's piece j and u = x P - j - 1/2, as sparse_kernel_pieces
+                r = np.sqrt(m_d2[q]) * scale
+                j = int(r)
+                if j > top:
+                    j = top
+                u = r - j
+                u -= 0.5
+                k = table[j, deg] * u
+                for h in range(deg - 1, 0, -1):
+                    k += table[j, h]
+                    k *= u
+                k += table[j, 0]
+                k *= sf2
+                if k < 0.0:
+                    k = 0.0
+                m_k[q] = k
+        for q in range(m):
+            o = m_o[q]
+            k = m_k[q]
+            ox = o // (w * w) - R
+            oy = (o // w) % w - R
+            oz = o % w - R
+            v = near[o]
+            if v < 0:
+                vx, vy, vz = bx + ox, by + oy, bz + oz
+                bc = (((vx >> 2) - blo0) * bd1 + ((vy >> 2) - blo1)) * bd2 + ((vz >> 2) - blo2)
+                lb = blk[bc]
+                if lb < 0:
+                    lb = nb
+                    blk[bc] = lb
+                    vloc[lb * 64: lb * 64 + 64] = -1
+                    nb += 1
+                li = lb * 64 + (((vx & 3) << 4) | ((vy & 3) << 2) | (vz & 3))
+                v = vloc[li]
+                if v < 0:
+                    v = nv
+                    vloc[li] = v
+                    vcnt[v] = 0
+                    c0[v] = c
+                    w0[v] = 0.0
+                    more[v] = -1
+                    for cq in range(dense_k):
+                        acc[v * dense_k + cq] = 0.0
+                    nv += 1
+                near[o] = v
+            vcnt[v] += 1
+            if dense_k:
+                acc[v * dense_k + c] += k
+                continue
+            if c0[v] == c:
+                w0[v] += k
+                continue
+            e = more[v]
+            while e >= 0 and ecls[e] != c:
+                e = enext[e]
+            if e < 0:
+                if ne == ecap:
+                    ecap *= 2
+                    g = np.empty(ecap, np.int32)
+                    g[:ne] = ecls[:ne]
+                    ecls = g
+                    g = np.empty(ecap, np.int32)
+                    g[:ne] = enext[:ne]
+                    enext = g
+                    f = np.empty(ecap)
+                    f[:ne] = evalue[:ne]
+                    evalue = f
+                e = ne
+                ecls[e] = c
+                evalue[e] = 0.0
+                enext[e] = more[v]
+                more[v] = e
+                ne += 1
+            evalue[e] += k
     if dense_k:
         nc = 0
     else:
