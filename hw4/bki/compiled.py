@@ -14,9 +14,11 @@ same bit for bit (the tests compare the two engines):
 * **Evidence of a scan** (:func:`scan_evidence`): the training points in raveled voxel order
   (stable), per point the voxel offsets in lexicographic order, each pair's kernel weight from the
   table of :func:`hw4.core.kernel.sparse_kernel_pieces` (as :mod:`hw4.bki.kernel_sums`); per
-  (voxel, class) the weights are summed from 0 in that order into a sparse per-scan list (only
-  the classes that occur), which :func:`merge` then adds to the map's evidence. Adding a scan's
-  sum first and the map's value after is the order of the numpy engine (``ev[slot] += add``).
+  (voxel, class) the weights are summed from 0 in that order into a sparse per-scan structure,
+  which ``_apply`` then adds to the map's evidence. Adding a scan's sum first and the map's value
+  after is the order of the numpy engine (``ev[slot] += add``). For a reach of 2+ voxels per axis
+  (the toy scans: 343 offsets per point) :func:`pair_sums` does the same sums in two passes over a
+  dense box of the scan's voxels (one thread), and the numpy merge adds them.
 
 New voxels take pool slots in (block key, voxel in block) order here (the numpy engine: raveled
 voxel order of the scan's box); the pool's row order is internal, :meth:`VoxelMap.evidence` and
@@ -208,13 +210,15 @@ def _codes(base, lo, dims):  # pragma: no cover - compiled
 
 @njit(cache=True, nogil=True)
 def _scan_evidence(points, labels, base, order, t0, t1, x0, x1, codes, lo, dims, R, res, ell2,
-                   scale, sf2, table, counting, dense_k):  # pragma: no cover - compiled
+                   scale, sf2, table, counting, dense_k, rank):  # pragma: no cover - compiled
     """Per-scan evidence in a sparse form. The points ``order[t0:t1]`` are visited in that order
     (raveled voxel order, stable), per point the offsets in lexicographic order (for ``R >= 2``
     all ``(2R + 1)^3`` distances are taken and those below ell kept without a branch per offset;
     the same pairs, distances and order); ``counting``
     (S-CSM): every point adds 1 to its own voxel (``R`` = 0), else the kernel weight to every
     voxel within ell. Only voxels with x index in ``[x0, x1)`` are summed (a thread's share).
+    ``rank`` (at least the box's size, all -1) maps a voxel's raveled code to its local voxel
+    while the scan is summed; its entries are set back to -1 before returning.
 
     Returns ``blk`` (per block of the scan's box of 4^3-voxel blocks: its local block, -1 if not
     touched), ``vloc`` (per local block and voxel in it: the local voxel, -1 if not touched) and
@@ -240,7 +244,8 @@ def _scan_evidence(points, labels, base, order, t0, t1, x0, x1, codes, lo, dims,
     ecls = np.empty(ecap, np.int32)
     evalue = np.empty(ecap)
     enext = np.empty(ecap, np.int32)
-    near = np.full(w * w * w, -1, np.int32)   # local voxels around the current point's voxel
+    vcode = np.empty(cap, np.int64)          # raveled code of each local voxel
+    s1 = dims[1] * dims[2]
     nb = 0
     nv = 0
     ne = 0
@@ -253,12 +258,8 @@ def _scan_evidence(points, labels, base, order, t0, t1, x0, x1, codes, lo, dims,
     sxa = np.empty(w)
     sya = np.empty(w)
     sza = np.empty(w)
-    last = -1
     for t in range(t0, t1):
         i = order[t]
-        if codes[i] != last:   # a new voxel of points: its neighbours not looked up yet
-            last = codes[i]
-            near[:] = -1
         px, py, pz = points[i, 0], points[i, 1], points[i, 2]
         bx, by, bz = base[i, 0], base[i, 1], base[i, 2]
         c = labels[i]
@@ -332,7 +333,8 @@ def _scan_evidence(points, labels, base, order, t0, t1, x0, x1, codes, lo, dims,
             ox = o // (w * w) - R
             oy = (o // w) % w - R
             oz = o % w - R
-            v = near[o]
+            code = codes[i] + ox * s1 + oy * dims[2] + oz
+            v = rank[code]
             if v < 0:
                 vx, vy, vz = bx + ox, by + oy, bz + oz
                 bc = (((vx >> 2) - blo0) * bd1 + ((vy >> 2) - blo1)) * bd2 + ((vz >> 2) - blo2)
@@ -353,8 +355,9 @@ def _scan_evidence(points, labels, base, order, t0, t1, x0, x1, codes, lo, dims,
                     more[v] = -1
                     for cq in range(dense_k):
                         acc[v * dense_k + cq] = 0.0
+                    vcode[v] = code
                     nv += 1
-                near[o] = v
+                rank[code] = v
             vcnt[v] += 1
             if dense_k:
                 acc[v * dense_k + c] += k
@@ -384,12 +387,66 @@ def _scan_evidence(points, labels, base, order, t0, t1, x0, x1, codes, lo, dims,
                 more[v] = e
                 ne += 1
             evalue[e] += k
+    for v in range(nv):
+        rank[vcode[v]] = -1
     if dense_k:
         nc = 0
     else:
         nc = nv
     return (blk, vloc[:nb * 64], vcnt[:nv], c0[:nc], w0[:nc], more[:nc], ecls[:ne], evalue[:ne],
             enext[:ne], acc[:nv * dense_k])
+
+
+@njit(cache=True, nogil=True)
+def _pairs(points, labels, base, lo, dims, R, res, ell2, scale, sf2, table, seen, rank, add, cnt):  # pragma: no cover - compiled
+    """Visit every (point, voxel) pair with ``d^2 < ell2``. Without ``rank`` (empty), only mark
+    ``seen[code] = True``; with it, add ``k(d)`` to ``add[rank[code], label]`` and 1 to
+    ``cnt[rank[code]]``. ``code`` is the voxel's raveled index in the box."""
+    marking = rank.shape[0] == 0
+    top = table.shape[0] - 1
+    deg = table.shape[1] - 1
+    for i in range(points.shape[0]):
+        px, py, pz = points[i, 0], points[i, 1], points[i, 2]
+        bx, by, bz = base[i, 0], base[i, 1], base[i, 2]
+        c = labels[i]
+        for ox in range(-R, R + 1):
+            dx = px - (bx + (ox + 0.5)) * res
+            sx = dx * dx
+            if sx >= ell2:
+                continue
+            cx = (bx + ox - lo[0]) * dims[1]
+            for oy in range(-R, R + 1):
+                dy = py - (by + (oy + 0.5)) * res
+                sxy = sx + dy * dy
+                if sxy >= ell2:
+                    continue
+                cxy = (cx + by + oy - lo[1]) * dims[2] - lo[2] + bz
+                for oz in range(-R, R + 1):
+                    dz = pz - (bz + (oz + 0.5)) * res
+                    d2 = sxy + dz * dz
+                    if d2 >= ell2:
+                        continue
+                    if marking:
+                        seen[cxy + oz] = True
+                        continue
+                    # the kernel's piece j and u = x P - j - 1/2, as sparse_kernel_pieces
+                    r = np.sqrt(d2) * scale
+                    j = int(r)
+                    if j > top:
+                        j = top
+                    u = r - j
+                    u -= 0.5
+                    k = table[j, deg] * u
+                    for q in range(deg - 1, 0, -1):
+                        k += table[j, q]
+                        k *= u
+                    k += table[j, 0]
+                    k *= sf2
+                    if k < 0.0:
+                        k = 0.0
+                    v = rank[cxy + oz]
+                    add[v, c] += k
+                    cnt[v] += 1
 
 
 @njit(cache=True, nogil=True)
@@ -526,6 +583,32 @@ def threads() -> int:
 _pool = None
 
 
+def pair_sums(points, labels, base, lo, dims, R: int, resolution: float, ell: float, sf2: float,
+              num_class: int):
+    """The (point, voxel) sums of one scan in two passes over a dense box (the first marks the
+    voxels reached, the second sums into a dense (voxels, classes) array), points in raveled voxel
+    order (stable): what :func:`hw4.bki.kernel_sums.kernel_sums` returns (``vt, add, cnt``), the
+    same values. Used for a reach of 2+ voxels, where it is the faster of the two ways here."""
+    lo = np.ascontiguousarray(lo, dtype=np.int64)
+    dims = np.ascontiguousarray(dims, dtype=np.int64)
+    codes = _codes(base, lo, dims)
+    order, _ = stable_order(codes, int(np.prod(dims)) - 1)
+    pts, lab, bs = points[order], labels[order], base[order]
+    args = (pts, lab, bs, lo, dims, int(R), float(resolution), float(ell) ** 2, _PIECES / float(ell),
+            float(sf2), _pieces())
+    n_box = int(np.prod(dims))
+    seen = np.zeros(n_box, np.bool_)
+    _pairs(*args, seen, np.zeros(0, np.int32), np.zeros((0, num_class)), np.zeros(0, np.int64))
+    vt = np.flatnonzero(seen)
+    del seen
+    rank = np.empty(n_box, np.int32)
+    rank[vt] = np.arange(len(vt))
+    add = np.zeros((len(vt), num_class))
+    cnt = np.zeros(len(vt), np.int64)
+    _pairs(*args, np.zeros(0, np.bool_), rank, add, cnt)
+    return vt, add, cnt
+
+
 DENSE_CLASSES = 8
 """Up to this many classes the compiled update sums a scan's evidence per voxel and class in a
 dense array (no per-pair search of the class); beyond, the first class of each voxel inline and
@@ -533,9 +616,12 @@ a list for the others (a voxel rarely sees more than one or two of 20 classes)."
 
 
 def scan_evidence(points, labels, base, lo, dims, R: int, resolution: float, ell: float,
-                  sf2: float, counting: bool, n_threads: int | None = None, num_class: int = 0):
+                  sf2: float, counting: bool, n_threads: int | None = None, num_class: int = 0,
+                  rank: np.ndarray | None = None):
     """The sparse evidence of one scan's training points (see :func:`_scan_evidence`), as a list
-    of parts, one per thread, whose blocks follow each other in key order (x slabs of blocks)."""
+    of parts, one per thread, whose blocks follow each other in key order (x slabs of blocks).
+    ``rank``: an int32 scratch array of -1 at least as long as the box (``prod(dims)``), kept by the
+    caller from scan to scan (the threads use disjoint parts of it); by default a new one."""
     global _pool
     lo = np.ascontiguousarray(lo, dtype=np.int64)
     dims = np.ascontiguousarray(dims, dtype=np.int64)
@@ -546,9 +632,11 @@ def scan_evidence(points, labels, base, lo, dims, R: int, resolution: float, ell
     bx = lo[0] + scodes // (dims[1] * dims[2])          # voxel x of the sorted points
     cuts = np.unique(np.quantile(bx, np.arange(1, n_threads) / n_threads).astype(np.int64) >> 2) << 2
     edges = [int(lo[0])] + [int(c) for c in cuts if lo[0] < c < lo[0] + dims[0]] + [int(lo[0] + dims[0])]
+    if rank is None or len(rank) < int(np.prod(dims)):
+        rank = np.full(int(np.prod(dims)), -1, np.int32)
     const = (codes, lo, dims, int(R), float(resolution), float(ell) ** 2, _PIECES / float(ell),
              float(sf2), _pieces(), bool(counting),
-             int(num_class) if 0 < num_class <= DENSE_CLASSES else 0)
+             int(num_class) if 0 < num_class <= DENSE_CLASSES else 0, rank)
     jobs = []
     for x0, x1 in zip(edges[:-1], edges[1:]):
         t0 = int(np.searchsorted(bx, x0 - R, "left"))   # the points within R voxels of the range
@@ -562,5 +650,5 @@ def scan_evidence(points, labels, base, lo, dims, R: int, resolution: float, ell
     return list(_pool.map(lambda a: _scan_evidence(*a), jobs))
 
 
-KERNELS = (_leaf_keys, _group, _lengths, _free_samples, _bases, _codes, _scan_evidence,
+KERNELS = (_pairs, _leaf_keys, _group, _lengths, _free_samples, _bases, _codes, _scan_evidence,
            _count_new, _apply)
