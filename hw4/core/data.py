@@ -20,8 +20,6 @@ import errno
 import hashlib
 import os
 import shutil
-import urllib.error
-import urllib.request
 import zipfile
 from dataclasses import dataclass
 from pathlib import Path
@@ -118,6 +116,7 @@ def ensure(name: str, data_dir: Path | None = None, shared_dir: Path | None = No
             shutil.copyfile(source, partial)
             origin = str(source)
         elif download and url != "-":
+            import urllib.request  # only for a download (http.client is slow to import)
             try:
                 with urllib.request.urlopen(url, timeout=60) as r, open(partial, "wb") as f:
                     shutil.copyfileobj(r, f)
