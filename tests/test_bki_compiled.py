@@ -258,3 +258,22 @@ def test_the_compiling_notice_only_on_a_terminal_and_only_when_not_cached(monkey
     monkeypatch.setattr("sys.stderr", io.StringIO())             # not a terminal: silent
     compiled.bases(np.zeros((1, 3)), 0.1)
     assert compiled._announced
+
+
+@pytest.mark.parametrize("K, threads", [(4, 1), (20, 1), (4, 2)])
+def test_the_sparse_path_for_a_reach_of_3_equals_numpy(K, threads):
+    """VoxelMap sums a reach of 2+ voxels in two passes (pair_sums); the sparse path, with its
+    branch-free offsets for such reaches, must give the same map when called on its own."""
+    rng = np.random.default_rng(K)
+    a = VoxelMap(0.1, K, "sbki", engine="numpy")
+    b = VoxelMap(0.1, K, "sbki", threads=threads)
+    for n in (2000, 1500):
+        pts = rng.normal(0, 0.6, (n, 3))
+        lab = rng.integers(0, K, n)
+        a.update(pts, lab)
+        base, bmin, bmax = compiled.bases(pts, 0.1)
+        R = 3
+        b._update_compiled(pts, lab, base, bmin - R, bmax + R - (bmin - R) + 1, R)
+    va, vb = a.evidence(), b.evidence()
+    assert len(va[0]) == len(vb[0]) > 0
+    assert all(np.array_equal(x, y) for x, y in zip(va, vb))
