@@ -55,8 +55,42 @@ def test_small_run_with_figures_skips_numba_and_scipy(tmp_path):
     assert (tmp_path / "task1_grid0.5_mean.png").is_file()
     assert (tmp_path / "task1_grid0.5_variance.png").is_file()
     assert "matplotlib" in mods
-    for heavy in ("numba", "scipy.spatial", "scipy.io"):
+    for heavy in ("numba", "scipy.spatial", "scipy.io", "matplotlib.pyplot"):
         assert heavy not in mods, heavy
+
+
+def test_plotting_imports_pyplot_only_for_a_figure_it_makes():
+    code = ("import sys; from hw4.core import plotting; a = 'matplotlib.pyplot' in sys.modules\n"
+            "plotting._new(None); print(a, 'matplotlib.pyplot' in sys.modules)")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=ROOT,
+                         env=dict(os.environ, MPLBACKEND="Agg"), check=True)
+    assert out.stdout.split() == ["False", "True"]
+
+
+@pytest.mark.parametrize("task", [1, 3], ids=["binary", "semantic"])
+@pytest.mark.parametrize("what", ["mean", "variance"])
+def test_cli_png_is_savefig_tight_pixel_for_pixel(tmp_path, task, what):
+    """save_map_png (one drawing, no pyplot) writes the pixels of the figure the CLI drew before:
+    pyplot, savefig(bbox_inches='tight'), the semantic map's legend outside the axes kept."""
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    from PIL import Image
+    from hw4.core import plotting
+    from hw4.tasks import build_map
+
+    ogm = build_map(task, 0.5)
+    title = f"{ogm.name} {what}, grid 0.5 m"
+    fig, ax = plt.subplots(figsize=(6.4, 5.4), dpi=100)
+    {"mean": plotting.plot_map, "variance": plotting.plot_variance}[what](ogm, ax=ax, title=title)
+    fig.savefig(tmp_path / "before.png", bbox_inches="tight", dpi=100)
+    plt.close(fig)
+    plotting.save_map_png(ogm, tmp_path / "after.png", what, title)
+    before = np.asarray(Image.open(tmp_path / "before.png"))
+    after = np.asarray(Image.open(tmp_path / "after.png"))
+    assert after.shape == before.shape
+    np.testing.assert_array_equal(after, before)
+    assert after.shape[1] > (650 if task == 3 and what == "mean" else 500)  # legend, colour bar
 
 
 @pytest.mark.parametrize("semantic", [False, True], ids=["binary", "semantic"])

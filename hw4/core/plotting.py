@@ -9,8 +9,12 @@ from __future__ import annotations
 
 import numpy as np
 import matplotlib as mpl
-import matplotlib.pyplot as plt
+import matplotlib.colors  # noqa: F401  (mpl.colors below)
 from matplotlib.patches import Patch
+
+# pyplot is imported where a figure is made without an ``ax`` (:func:`_new`, :func:`map_figure`),
+# not here: the CLI writes its PNGs through :func:`save_map_png` with the Agg canvas alone, and
+# importing pyplot (its backend machinery) costs a small run a good part of its time.
 
 CLASS_NAMES = ["north rooms", "west rooms", "east rooms", "south rooms", "middle rooms", "hallways"]
 CLASS_COLORS = np.array([[0.0, 0.447, 0.741], [0.850, 0.325, 0.098], [0.929, 0.694, 0.125],
@@ -61,6 +65,7 @@ def _axes(ax, grid, title):
 
 def _new(ax):
     if ax is None:
+        import matplotlib.pyplot as plt
         _, ax = plt.subplots()
     return ax
 
@@ -202,7 +207,38 @@ def plot_dataset(data, ax=None, every=3, title=None, path_color="crimson"):
 
 def map_figure(ogm, title: str):
     """A figure with the map (left) and its variance (right), as the CLI writes them."""
+    import matplotlib.pyplot as plt
     fig, (a, b) = plt.subplots(1, 2, figsize=(11, 4.8), constrained_layout=True)
     plot_map(ogm, ax=a, title=f"{title}: mean")
     plot_variance(ogm, ax=b, title=f"{title}: variance")
     return fig
+
+
+def save_map_png(ogm, path, what: str, title: str, figsize=(6.4, 5.4), dpi: float = 100.0,
+                 pad_inches: float = 0.1) -> None:
+    """Write one map figure as the CLI does: ``what`` ``'mean'`` (:func:`plot_map`) or
+    ``'variance'`` (:func:`plot_variance`), titled ``title``, to the PNG file ``path``.
+
+    The figure is laid out at ``figsize`` [in], then cut to its content plus ``pad_inches``
+    [in] (the class legend right of a semantic map included): the same pixels as
+    ``savefig(bbox_inches='tight')`` at ``dpi`` [pixels per inch], but on a bare Agg canvas (no
+    pyplot) and without that option's first, dry drawing of the figure. The axes keep their
+    size and place in inches; the figure's edges move to the content's bounding box.
+    """
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
+
+    draw = {"mean": plot_map, "variance": plot_variance}[what]
+    fig = Figure(figsize=figsize, dpi=dpi)
+    canvas = FigureCanvasAgg(fig)
+    draw(ogm, ax=fig.add_subplot(), title=title)
+    for ax in fig.axes:
+        ax.apply_aspect()                      # the map's equal aspect, before measuring
+    box = fig.get_tightbbox(canvas.get_renderer()).padded(pad_inches)  # [in] from the corner
+    w, h = fig.get_size_inches()
+    places = [ax.get_position().bounds for ax in fig.axes]   # fractions of the w x h figure
+    fig.set_size_inches(box.width, box.height)
+    for ax, (x, y, dx, dy) in zip(fig.axes, places):          # the same place in inches
+        ax.set_position([(x * w - box.x0) / box.width, (y * h - box.y0) / box.height,
+                         dx * w / box.width, dy * h / box.height])
+    canvas.print_png(path)
