@@ -492,7 +492,7 @@ def test_interrupted_run_removes_its_temporary_files(tmp_path):
 
 
 def test_run_writes_all_outputs_or_none(tmp_path, capsys, tiny_tasks, monkeypatch):
-    import matplotlib.figure
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
     out = tmp_path / "out"
     assert main(["run", "--task", "3", "--grid-size", "0.5", "--out", str(out)]) == 0
     assert finished_files(out) == ["task3_grid0.5.npz", "task3_grid0.5_mean.png",
@@ -500,7 +500,9 @@ def test_run_writes_all_outputs_or_none(tmp_path, capsys, tiny_tasks, monkeypatc
 
     def fail(*a, **k):
         raise OSError(errno.ENOSPC, "No space left on device")
-    monkeypatch.setattr(matplotlib.figure.Figure, "savefig", fail)
+    # the disk fills while a PNG is written (print_png: what savefig and the CLI's own
+    # figure writer both end in)
+    monkeypatch.setattr(FigureCanvasAgg, "print_png", fail)
     err = cli_err(capsys, ["run", "--task", "1", "--grid-size", "0.5", "--out", str(out)])
     assert "No space left on device" in err and "nothing was written" in err
     assert finished_files(out) == ["task3_grid0.5.npz", "task3_grid0.5_mean.png",
