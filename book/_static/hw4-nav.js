@@ -323,18 +323,28 @@
       ".bd-article figure img, .bd-article .cell_output img, .bd-article img.hw4-interactive-still");
     Array.prototype.forEach.call(images, function (img) {
       var src = img.getAttribute("src");
-      // already a link, or inline data a browser will not open as a page (the still of an
-      // interactive view zooms like any figure until its button replaces it by the view)
-      if (!src || /^data:/.test(src) || img.closest("a")) {
+      // inline data a browser will not open as a page (the still of an interactive view zooms
+      // like any figure until its button replaces it by the view)
+      if (!src || /^data:/.test(src)) {
         return;
       }
-      var link = document.createElement("a");
-      link.className = "hw4-image-link";
-      link.href = src;
+      var link = img.closest("a");
+      if (link) {
+        // Sphinx's own link around a figure with a width (a.image-reference to the image
+        // itself) becomes the viewer's link; any other link is left as it is
+        if (!link.classList.contains("image-reference") || link.getAttribute("href") !== src) {
+          return;
+        }
+        link.classList.add("hw4-image-link");
+      } else {
+        link = document.createElement("a");
+        link.className = "hw4-image-link";
+        link.href = src;
+        img.parentNode.insertBefore(link, img);
+        link.appendChild(img);
+      }
       link.title = "Open the full-size image";
       link.setAttribute("aria-label", "Open " + figureName(img) + " at full size");
-      img.parentNode.insertBefore(link, img);
-      link.appendChild(img);
       link.addEventListener("click", function (event) {
         if (event.ctrlKey || event.metaKey || event.shiftKey || event.altKey || event.button > 0) {
           return; // a new tab or window: the file itself
