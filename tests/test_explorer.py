@@ -222,6 +222,8 @@ def test_explorer_semantic_table_has_the_class_counts():
     want = fresh_map(4, grid_size=0.5)
     np.testing.assert_array_equal(e.ogm.map["alpha"], want.map["alpha"])
     assert "most likely class" not in repr(e) and "explorer" in repr(e)
+    legend = e._legend_html()   # the maps' legend text: the data's label and the handout's name
+    assert "label 1 (north rooms)" in legend and "label 6 (hallways)" in legend
 
 
 def test_explorer_refuses_bad_settings():

@@ -495,7 +495,8 @@ class Explorer:
             return ""
         from matplotlib.colors import to_hex
         hexes = [to_hex(c) for c in plotting.CLASS_COLORS]
-        items = list(zip(plotting.CLASS_NAMES, hexes)) + [("free", "#ffffff"), ("unknown", "#808080")]
+        names = [plotting.class_label(c) for c in range(1, len(plotting.CLASS_NAMES) + 1)]
+        items = list(zip(names, hexes)) + [("free", "#ffffff"), ("unknown", "#808080")]
         return "<br>" + " ".join(
             f'<span style="display:inline-block;width:0.9em;height:0.9em;background:{c};'
             f'border:1px solid #999;vertical-align:middle"></span> {html.escape(n)}' for n, c in items)
