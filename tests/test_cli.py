@@ -74,3 +74,33 @@ def test_run_out_is_a_file(tmp_path):
     r = cli("run", "--task", "1", "--grid-size", "0.5", "--out", str(afile))
     assert r.returncode == 2 and "is a file, not a folder" in r.stderr
     assert afile.read_text() == "mine"
+
+
+def test_run_with_a_damaged_data_cache_rebuilds_it_and_gives_the_same_map(tmp_path):
+    """A cache file cut short (a full disk, a killed process, a bad copy): the run says so in one
+    line, reads the verified .mat file instead, and writes the map of a run with a sound cache."""
+    from hw4.core import data
+    mine = tmp_path / "data"
+    (mine / "intel").mkdir(parents=True)
+    (mine / data.INTEL).symlink_to(data.ensure(data.INTEL).resolve())
+    env = {"MPLBACKEND": "Agg", "PATH": "/usr/bin:/bin", "PYTHONPATH": str(ROOT),
+           "HW4_DATA_DIR": str(mine)}
+    run = ["run", "--task", "1", "--grid-size", "0.5", "--no-figures", "--force"]
+
+    def go(out):
+        return subprocess.run([sys.executable, "-m", "hw4", *run, "--out", str(out)],
+                              capture_output=True, text=True, cwd=ROOT, env=env)
+
+    r = go(tmp_path / "a")  # the first run writes the cache
+    assert r.returncode == 0 and r.stderr == "", r.stderr
+    (cache,) = (mine / ".cache").glob("*.npz")
+    sound = cache.read_bytes()
+    cache.write_bytes(sound[: len(sound) * 2 // 3])
+    r = go(tmp_path / "b")
+    assert r.returncode == 0, r.stderr
+    assert "Traceback" not in r.stderr and len(r.stderr.splitlines()) == 1
+    assert "data cache" in r.stderr and "rebuilding it" in r.stderr
+    assert cache.read_bytes() == sound
+    a, b = (np.load(tmp_path / d / "task1_grid0.5.npz") for d in "ab")
+    for k in a.files:
+        np.testing.assert_array_equal(a[k], b[k])

@@ -12,7 +12,9 @@ aside as ``<name>.partial`` and an :class:`~hw4.core.errors.InputError` says wha
 
 :func:`load_intel` returns plain arrays (poses and scans) and validates the structure. The arrays
 of a verified Intel file are kept in ``data/.cache/`` (keyed by its SHA-256) so that later
-processes skip ``scipy.io`` (a quarter of a second to import) and the parsing.
+processes skip ``scipy.io`` (a quarter of a second to import) and the parsing. A cache file
+carries the source's SHA-256 and one of its own arrays, checked on every load (about 2 ms); a
+cache file that is cut short, unreadable or does not match is rebuilt from the verified source.
 """
 from __future__ import annotations
 
@@ -20,6 +22,7 @@ import errno
 import hashlib
 import os
 import shutil
+import sys
 import zipfile
 from dataclasses import dataclass
 from pathlib import Path
@@ -313,39 +316,76 @@ def validate(poses: np.ndarray, scans: list, semantic: bool | None = None) -> No
 
 
 CACHE = ".cache"  # folder in data/ holding the loaded arrays of each verified .mat file
+CACHE_VERSION = 2  # layout of a cache file (v1 had no checksum of its own)
+_CACHE_KEYS = {"poses", "scans", "counts", "source", "digest"}
 
 
 def _cache_file(name: str, sha: str) -> Path:
-    """``data/.cache/<stem>-<sha256[:16]>.npz``: the arrays of the verified file ``name``."""
-    return DATA_DIR / CACHE / f"{Path(name).stem}-{sha[:16]}.npz"
+    """``data/.cache/<stem>-<sha256[:16]>-v2.npz``: the arrays of the verified file ``name``."""
+    return DATA_DIR / CACHE / f"{Path(name).stem}-{sha[:16]}-v{CACHE_VERSION}.npz"
 
 
-def _read_cache(path: Path):
-    """(poses, scans) from a cache file, or None when it is missing or unreadable."""
+def _cache_digest(source: str, poses: np.ndarray, flat: np.ndarray, counts: np.ndarray) -> str:
+    """SHA-256 (hex) of a cache file's content: the source file's SHA-256, then each array's
+    shape, dtype and bytes in C order (about 2 ms for the Intel data)."""
+    h = hashlib.sha256(f"hw4 intel cache v{CACHE_VERSION} {source}".encode())
+    for a in (poses, flat, counts):
+        h.update(f" {a.shape} {a.dtype.str} ".encode())
+        h.update(np.ascontiguousarray(a).data)
+    return h.hexdigest()
+
+
+def _cache_problem(path: Path, source: str | None):
+    """((poses, scans), None) from a cache file, or (None, why) when it is missing ('missing'),
+    unreadable, cut short, of another layout, made from another source file or fails its
+    checksum. ``source``: the SHA-256 the cache must have been made from (None: any)."""
     try:
-        with np.load(path, allow_pickle=False) as z:
+        # np.load is given an open file: given a path, it leaves the file open when the zip is bad
+        with open(path, "rb") as f, np.load(f, allow_pickle=False) as z:
+            if set(z.files) != _CACHE_KEYS:
+                return None, "not a cache file of this version"
             poses, flat, counts = z["poses"], z["scans"], z["counts"]
-    except (OSError, ValueError, KeyError, EOFError, zipfile.BadZipFile):
-        return None
-    if poses.ndim != 2 or flat.ndim != 2 or counts.ndim != 1 or len(counts) != len(poses) \
-            or counts.sum() != flat.shape[1] or poses.dtype != np.float64 or flat.dtype != np.float64:
-        return None
+            made_from, digest = str(z["source"]), str(z["digest"])
+    except FileNotFoundError:
+        return None, "missing"
+    except Exception as e:  # any failure to read it (truncated zip, bad CRC, bad header, ...)
+        return None, f"unreadable ({type(e).__name__})"
+    if not (poses.ndim == 2 and poses.shape[1] == 3 and poses.dtype == np.float64
+            and flat.ndim == 2 and flat.shape[0] in (2, 3) and flat.dtype == np.float64
+            and counts.ndim == 1 and counts.dtype == np.int64 and len(counts) == len(poses)
+            and (counts > 0).all() and counts.sum() == flat.shape[1]):
+        return None, "arrays of the wrong shape or type"
+    if source is not None and made_from != source:
+        return None, "made from another source file"
+    if digest != _cache_digest(made_from, poses, flat, counts):
+        return None, "checksum mismatch"
     bounds = np.concatenate([[0], np.cumsum(counts)])
     # each scan in the memory order loadmat gives it (MATLAB's column order)
-    return poses, [np.asfortranarray(flat[:, a:b]) for a, b in zip(bounds[:-1], bounds[1:])]
+    return (poses, [np.asfortranarray(flat[:, a:b]) for a, b in zip(bounds[:-1], bounds[1:])]), None
 
 
-def _write_cache(path: Path, poses: np.ndarray, scans: list) -> None:
-    """Keep the loaded arrays for the next process (written whole or not at all; a read-only
-    data folder just goes without)."""
+def _read_cache(path: Path, source: str | None = None):
+    """(poses, scans) from a cache file, or None when it is missing, unreadable or fails its
+    checks (layout, source file ``source``, SHA-256 of its arrays); see :func:`_cache_problem`."""
+    return _cache_problem(path, source)[0]
+
+
+def _write_cache(path: Path, poses: np.ndarray, scans: list, source: str) -> None:
+    """Keep the loaded arrays of the source file with SHA-256 ``source`` for the next process,
+    with their own SHA-256: written to a temporary name, synced and renamed (the file appears
+    whole or not at all; a read-only data folder just goes without)."""
     if len({s.shape[0] for s in scans}) != 1:
         return
-    tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
+    flat = np.concatenate(scans, axis=1)
+    counts = np.array([s.shape[1] for s in scans], dtype=np.int64)
+    tmp = path.with_name(f".{path.name}.{os.getpid()}-{os.urandom(4).hex()}.tmp")
     try:
         path.parent.mkdir(exist_ok=True)
         with open(tmp, "wb") as f:
-            np.savez(f, poses=poses, scans=np.concatenate(scans, axis=1),
-                     counts=np.array([s.shape[1] for s in scans], dtype=np.int64))
+            np.savez(f, poses=poses, scans=flat, counts=counts, source=np.array(source),
+                     digest=np.array(_cache_digest(source, poses, flat, counts)))
+            f.flush()
+            os.fsync(f.fileno())
         os.replace(tmp, path)
     except OSError:
         try:
@@ -364,16 +404,20 @@ def load_intel(semantic: bool = False, path: Path | None = None) -> IntelData:
     path : Path, optional
         Read this ``.mat`` file instead of the verified copy in ``data/``.
     """
-    cache = None
+    cache = source = None
     if path is None:
         name = INTEL_SEMANTIC if semantic else INTEL
         path = ensure(name)  # verified against its SHA-256
         if Path(path).parent == DATA_DIR / Path(name).parent:
-            cache = _cache_file(name, manifest()[name][0])
-            hit = _read_cache(cache)
+            source = manifest()[name][0]
+            cache = _cache_file(name, source)
+            hit, problem = _cache_problem(cache, source)
             if hit is not None:  # the arrays loadmat gave for this very file, bit for bit
                 validate(*hit, semantic=semantic)
                 return IntelData(*hit)
+            if problem != "missing":
+                print(f"note: the data cache {cache} is {problem}; rebuilding it from the verified "
+                      f"{name}.", file=sys.stderr)
     raw = _loadmat(Path(path))
     for key in ("robotPose", "laserScan"):
         if key not in raw:
@@ -382,7 +426,7 @@ def load_intel(semantic: bool = False, path: Path | None = None) -> IntelData:
     scans = scans_from_cell(raw["laserScan"])
     validate(poses, scans, semantic=semantic)
     if cache is not None:
-        _write_cache(cache, poses, scans)
+        _write_cache(cache, poses, scans, source)
     return IntelData(poses, scans)
 
 
