@@ -307,3 +307,68 @@ def test_region_change_share_counts_region_cells_only():
     assert ch.share_swapped != ch.region_swapped / ch.compared   # not over every cell
     same = stats.compare_labels(a, a)
     assert same.region_swapped == 0 and same.region_kept == same.region_compared == 4
+
+
+def _glued(nb_path, *names):
+    """The chapter's glued values ``names`` (their stored text/plain records) as floats."""
+    got = {}
+    for cell in _nb(report.ROOT / nb_path)["cells"]:
+        for o in cell.get("outputs", []):
+            name = o.get("metadata", {}).get("scrapbook", {}).get("name")
+            if name in names:
+                got[name] = float(o["data"][report.GLUE_MIME + "text/plain"])
+    return [got[n] for n in names]
+
+
+def test_task2b_kernel_weights_are_the_kernels_at_the_glued_distances():
+    """Task 2B states in words the smallest weight an end point gets at 0.135 m (the kernel at
+    half a cell diagonal), twice and both times as a lower bound, and the kernel's value at l/2;
+    they must be the sparse kernel's values at the chapter's glued distances and parameters."""
+    from hw4.core.kernel import sparse_kernel
+
+    corner, corner_027, sigma0, ell = _glued(report.TASKS[2], "t2_corner_0135", "t2_corner_027",
+                                             "t2_sigma0", "t2_l")
+    k = float(sparse_kernel(corner, sigma0, ell))
+    text = " ".join((report.REPORT_DIR / "task2.md").read_text().split())
+    bounds = re.findall(r"weight of at least (?:\$k\(([\d.]+)\\text\{ m\}\) = )?([\d.]+)", text)
+    assert len(bounds) == 2, bounds           # the explanation and the conclusion
+    assert all(value == f"{k:.4f}" for _, value in bounds), (bounds, k)
+    assert bounds[0][0] == f"{corner:.3f}"
+    # "the only one whose half cell diagonal is under half the kernel length"
+    assert corner < ell / 2 < corner_027
+    # "at 0.27 m ... the kernel has fallen to almost zero"
+    assert sparse_kernel(corner_027, sigma0, ell) < 1e-3 * sigma0
+    # "below about l/2, where the kernel still weighs an end point at a sixth of its peak"
+    assert "a sixth of its peak" in text
+    assert abs(sparse_kernel(ell / 2, sigma0, ell) - sigma0 / 6) < 1e-12
+
+
+def test_rviz_screenshot_prints_its_panel_enlarged_beside_the_map(sources, tmp_path):
+    """Fig. 5.1's print version: the display panel (status rows) enlarged to the height of the
+    map's part of the 3D view, left of it, so that its text prints at about 7 pt, not 2-3 pt."""
+    from PIL import Image
+    out, _ = sources
+    t5 = "".join(c["source"] for c in _nb(out / "task5.ipynb")["cells"]
+                 if c["cell_type"] == "markdown")
+    assert "```{figure} _print/fig-t5-rviz-kitti.png\n" in t5
+    img = Image.open(out / "_print" / "fig-t5-rviz-kitti.png")
+    top, bottom = report.RVIZ_VIEW[1], report.RVIZ_VIEW[3]
+    view_w = report.RVIZ_VIEW[2] - report.RVIZ_VIEW[0]
+    rows = sum(b[3] - b[1] for b in report.RVIZ_PANEL) + report.RVIZ_PANEL_GAP
+    scale = (bottom - top) / rows
+    assert img.height == bottom - top
+    panel_w = img.width - view_w - 24
+    assert abs(panel_w - 362 * scale) <= 1
+    # the panel's text (RViz's 9 pt, about 13 px a line-height em) printed 7 in wide
+    em_pt = 13 * scale / img.width * 7 * 72
+    assert em_pt >= 6, em_pt
+    # the map's pixels are the screenshot's, unscaled
+    shot = Image.open(report._folder(5) / "_static" / "t5_rviz_kitti04.png").convert("RGB")
+    assert img.convert("RGB").crop((img.width - view_w, 0, img.width, img.height)).tobytes() == \
+        shot.crop(report.RVIZ_VIEW).tobytes()
+    # a screenshot of another size is refused with one sentence, before anything is written
+    small = tmp_path / "small.png"
+    Image.new("RGB", (800, 600), "white").save(small)
+    with pytest.raises(InputError, match="not the 1854 x 1056 px window"):
+        report.rviz_view_and_panel(small, tmp_path / "x.png")
+    assert not (tmp_path / "x.png").exists()

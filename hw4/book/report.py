@@ -79,6 +79,65 @@ def _video_text(names: list[str]) -> str:
     code = [f"`{n}`" for n in names]
     return code[0] if len(code) == 1 else ", ".join(code[:-1]) + " and " + code[-1]
 
+RVIZ_WINDOW = (1854, 1056)
+"""The size [px] of the RViz window in the Task 5 screenshots; :data:`RVIZ_VIEW` and
+:data:`RVIZ_PANEL` are boxes in it."""
+RVIZ_VIEW = (385, 300, 1561, 959)
+"""(left, top, right, bottom) [px]: the part of RViz's 3D view the map of sequence 04 fills."""
+RVIZ_PANEL = ((0, 84, 362, 256), (0, 445, 362, 542))
+"""Boxes [px] of RViz's display panel: its global options and status, down to the point cloud
+display's row, and the marker display with its status (the switched-off point cloud display's
+greyed-out rows between them are left out)."""
+RVIZ_PANEL_GAP = 8
+"""Height [px, before enlarging] of the dashed gap that marks where rows were left out."""
+PRINT_VERSIONS = {"fig-t5-rviz-kitti": "rviz_view_and_panel"}
+"""Figures the report prints in a version of their own (a function of this module, by name):
+RViz's full window printed 7 in wide sets its panel text at about 3 pt."""
+
+
+def rviz_view_and_panel(src: Path, dst: Path) -> None:
+    """Write to ``dst`` (PNG) the RViz screenshot ``src`` as the report prints it: RViz's display
+    panel (:data:`RVIZ_PANEL`), enlarged to the height of the map's part of the 3D view
+    (:data:`RVIZ_VIEW`), left of it. Printed 7 in wide, the panel's text is about 7 pt (in the
+    whole window, 2-3 pt). One sentence (:class:`InputError`) if ``src`` is not an RViz window
+    of :data:`RVIZ_WINDOW` pixels."""
+    from PIL import Image, ImageDraw
+
+    try:
+        shot = Image.open(src).convert("RGB")
+    except OSError as e:
+        raise InputError(f"cannot read the RViz screenshot {src} ({e}).") from None
+    if shot.size != RVIZ_WINDOW:
+        raise InputError(f"the RViz screenshot {src} is {shot.size[0]} x {shot.size[1]} px, not "
+                         f"the {RVIZ_WINDOW[0]} x {RVIZ_WINDOW[1]} px window whose panel and view "
+                         "hw4.book.report.RVIZ_PANEL and RVIZ_VIEW locate.")
+    view = shot.crop(RVIZ_VIEW)
+    pieces = [shot.crop(box) for box in RVIZ_PANEL]
+    width = max(p.width for p in pieces)
+    panel = Image.new("RGB", (width, sum(p.height for p in pieces)
+                              + RVIZ_PANEL_GAP * (len(pieces) - 1)), (239, 239, 239))
+    y = 0
+    draw = ImageDraw.Draw(panel)
+    for i, piece in enumerate(pieces):
+        panel.paste(piece, (0, y))
+        y += piece.height
+        if i < len(pieces) - 1:   # the cut: a dashed line across the gap
+            mid = y + RVIZ_PANEL_GAP // 2
+            for x in range(0, width, 12):
+                draw.line([(x, mid), (x + 6, mid)], fill=(120, 120, 120), width=1)
+            y += RVIZ_PANEL_GAP
+    scale = view.height / panel.height
+    panel = panel.resize((round(panel.width * scale), view.height), Image.LANCZOS)
+    gap = 24
+    out = Image.new("RGB", (panel.width + gap + view.width, view.height), (255, 255, 255))
+    out.paste(panel, (0, 0))
+    ImageDraw.Draw(out).rectangle([0, 0, panel.width - 1, panel.height - 1],
+                                  outline=(150, 150, 150), width=2)
+    out.paste(view, (panel.width + gap, 0))
+    dst.parent.mkdir(parents=True, exist_ok=True)
+    out.save(dst)
+
+
 MARK = re.compile(r"^<!--\s*(figure|table):\s*(.+?)\s*-->\s*$", re.M)
 CAPTION = re.compile(r"\A\s*<!--\s*caption\s*\n(.*?)\n\s*-->[ \t]*\n?", re.S)
 """The report's own caption of the figure whose marker it follows."""
@@ -273,12 +332,16 @@ def _plan(task: int, text: str, nb: dict) -> list[tuple]:
 
 
 def task_notebook(task: int, text: str, nb: dict, equations: dict[str, str],
-                  elsewhere: set[str] = frozenset(), others: list[dict] = ()) -> tuple[dict, list]:
+                  elsewhere: set[str] = frozenset(), others: list[dict] = (),
+                  prints: list | None = None) -> tuple[dict, list]:
     """The report's notebook for one task, and the figure names it holds.
 
     ``elsewhere``: names the other tasks of the report hold (a caption may refer to them);
     ``others``: the other chapters, whose glued values the text may quote
-    (:func:`borrowed_glue`)."""
+    (:func:`borrowed_glue`); ``prints``: a list to which the print versions
+    (:data:`PRINT_VERSIONS`) of the Markdown figures it places are added, as
+    ``(function, source image, image path in the report's folder)``; the figure then shows
+    that path (without ``prints``, the chapter's image)."""
     figures = figure_cells(nb, folder=_folder(task))
     tables = _blocks(nb, "table")
     cells = glue_cells(nb) + borrowed_glue(text, nb, list(others))
@@ -312,6 +375,12 @@ def task_notebook(task: int, text: str, nb: dict, equations: dict[str, str],
                                                 _source(cell), re.M | re.S)
                          if re.search(r"^:name: " + re.escape(item) + r"\s*$", b.group(0), re.M)]
                 text = block[0].group(0)
+                if item in PRINT_VERSIONS and prints is not None:
+                    head = re.match(r"(```\{figure\} *)(\S+)", text)
+                    rel = f"_print/{item}.png"
+                    prints.append((globals()[PRINT_VERSIONS[item]],
+                                   _folder(task) / head.group(2), rel))
+                    text = head.group(1) + rel + text[head.end():]
                 if own is not None:  # the report's caption replaces the block's body
                     head = re.match(r"```\{(?:figure|video)\}[^\n]*\n(?::[^\n]*\n)*", text)
                     text = head.group(0) + "\n" + own + "\n```"
@@ -423,7 +492,7 @@ def build_sources(out: str | Path = SRC, name: str | None = None, root: Path = R
     out = Path(out)
     equations = background_equations(root / "book" / "background.ipynb")
     videos = _video_text(chapter_videos(_load(root / TASKS[5])))
-    books, placed, texts, nbs = {}, {}, {}, {}
+    books, placed, texts, nbs, prints = {}, {}, {}, {}, []
     for task, rel in TASKS.items():
         text_path = report_dir / f"task{task}.md"
         if not text_path.is_file():
@@ -434,7 +503,7 @@ def build_sources(out: str | Path = SRC, name: str | None = None, root: Path = R
     for task in TASKS:
         others = [nbs[t] for t in TASKS if t != task]
         books[task], placed[task] = task_notebook(task, texts[task], nbs[task], equations, names,
-                                                  others)
+                                                  others, prints)
     intro = (report_dir / "intro.md").read_text(encoding="utf-8")
     who = name or "(no name given)"
     intro = (intro.replace("{{student}}", who).replace("{{video}}", videos)
@@ -442,6 +511,12 @@ def build_sources(out: str | Path = SRC, name: str | None = None, root: Path = R
     if out.exists():
         shutil.rmtree(out)
     out.mkdir(parents=True)
+    try:
+        for make, src, rel in prints:
+            make(src, out / rel)
+    except InputError:
+        shutil.rmtree(out)
+        raise
     (out / "intro.md").write_text(intro, encoding="utf-8")
     for task, nb in books.items():
         (out / f"task{task}.ipynb").write_text(json.dumps(nb, indent=1, ensure_ascii=False) + "\n",
