@@ -163,21 +163,10 @@ def _atan2_fast(y, x):  # pragma: no cover - compiled
 
 
 @njit(cache=True, nogil=True, inline="always")
-def _nearest_fast(pose, phi, srt, seg_start, seg_len, bin_lo, sbearing, bin_scale,
-                  bins):  # pragma: no cover - compiled
-    """``_nearest`` (bin-table poses) for a bearing ``phi`` known within EPS: the beam's sorted
-    position, its |difference| and whether both are certain (no bearing within EPS of phi, and
-    the two neighbours' differences apart by more than 2 EPS)."""
-    start = seg_start[pose]
-    n = seg_len[pose]
-    b = math.floor((phi + PI) * bin_scale)
-    ib = int(b) if b > 0 else 0
-    if ib > bins - 1:
-        ib = bins - 1
-    pos = bin_lo[pose, ib]
-    nxt = pos if pos < n - 1 else n - 1
-    if pos < n and sbearing[start + nxt] < phi:
-        pos += 1
+def _nearest_at(pos, start, n, phi, srt, sbearing):  # pragma: no cover - compiled
+    """The tail of :func:`_nearest_fast`: given ``pos``, the number of the pose's sorted
+    bearings below ``phi`` (its segment ``start``, length ``n``), the nearest beam's sorted
+    position, its |difference| and whether both are certain."""
     sure = True
     if pos > 0 and sbearing[start + pos - 1] > phi - EPS:
         sure = False
@@ -198,6 +187,25 @@ def _nearest_fast(pose, phi, srt, seg_start, seg_len, bin_lo, sbearing, bin_scal
     if d1 < d0 or (d1 == d0 and srt[p1] < srt[p0]):
         return p1, d1, sure
     return p0, d0, sure
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _nearest_fast(pose, phi, srt, seg_start, seg_len, bin_lo, sbearing, bin_scale,
+                  bins):  # pragma: no cover - compiled
+    """``_nearest`` (bin-table poses) for a bearing ``phi`` known within EPS: the beam's sorted
+    position, its |difference| and whether both are certain (no bearing within EPS of phi, and
+    the two neighbours' differences apart by more than 2 EPS)."""
+    start = seg_start[pose]
+    n = seg_len[pose]
+    b = math.floor((phi + PI) * bin_scale)
+    ib = int(b) if b > 0 else 0
+    if ib > bins - 1:
+        ib = bins - 1
+    pos = bin_lo[pose, ib]
+    nxt = pos if pos < n - 1 else n - 1
+    if pos < n and sbearing[start + nxt] < phi:
+        pos += 1
+    return _nearest_at(pos, start, n, phi, srt, sbearing)
 
 
 @njit(cache=True, nogil=True, inline="always")
@@ -570,6 +578,246 @@ def _cells_kernel(c0, c1, cells, poses, nn, reach, ranges, cls_hit, srt, key, se
 
 
 
+PASS_PAIRS = 1 << 20  # (cell, pose) pairs per block of the pose-by-pose pass (bounds its memory)
+
+
+@njit(cache=True, nogil=True)
+def _pose_pass(c0, c1, cells, poses, nn, ranges, cls_hit, srt, key, seg_start, seg_len, bin_lo,
+               dense, sbearing, bin_scale, bins, continuous, z_max, half, wb2, bmin, bmax, l,
+               acc, kk, ent, pairs):  # pragma: no cover - compiled
+    """The nearest beams of the (cell, pose) pairs of cells c0:c1 (poses ``nn``), pose by pose.
+
+    Each pair takes the steps of :func:`_cells_kernel`. Discrete models add their counts to
+    ``acc`` at once (whole numbers: any order gives the same sums). Continuous models write
+    ``kk[(ci - c0) * k + q]``: the sorted position of the nearest beam of pair (ci, nn[ci, q])
+    when that beam can come within l of the cell, else -1 (their sums are formed cell by cell
+    by :func:`_kernel_pass`). ``ent`` (at least (c1 - c0) k int32) is scratch.
+
+    A pose meets its cells in ascending order, so one pose's bearing index stays in the cache,
+    and along a row of cells the count of the pose's bearings below the cell's bearing (from
+    which the nearest beam follows) is found by stepping from the previous cell's count; the
+    steps end where ``sbearing[pos - 1] < phi <= sbearing[pos]``, the count the bin table gives.
+    """
+    n_per = nn.shape[1]
+    n_poses = poses.shape[0]
+    free = acc.shape[1] - 1
+    lim = l + 1e-9
+    start = np.zeros(n_poses + 1, np.int64)  # the pairs by pose: a counting sort
+    for ci in range(c0, c1):
+        for q in range(n_per):
+            start[nn[ci, q] + 1] += 1
+    for t in range(n_poses):
+        start[t + 1] += start[t]
+    fill = start[:-1].copy()
+    for ci in range(c0, c1):
+        for q in range(n_per):
+            t = nn[ci, q]
+            ent[fill[t]] = (ci - c0) * n_per + q
+            fill[t] += 1
+    if continuous:
+        for e in range((c1 - c0) * n_per):
+            kk[e] = -1
+    n_pairs = 0
+    n_fast = 0
+    k = 0
+    diff = 0.0
+    zk = 0.0
+    near = False
+    wide = False
+    reach_ok = False
+    for t in range(n_poses):
+        px = poses[t, 0]
+        py = poses[t, 1]
+        h = poses[t, 2]
+        dn = dense[t]
+        lo_t = bmin[t] - wb2
+        hi_t = bmax[t] + wb2
+        wraps = (lo_t <= -PI + 1e-9) or (hi_t >= PI - 1e-9)
+        st = seg_start[t]
+        n = seg_len[t]
+        ppos = 0
+        pci = -2
+        for e in range(start[t], start[t + 1]):
+            slot = ent[e]
+            ci = c0 + slot // n_per
+            cx = cells[ci, 0]
+            cy = cells[ci, 1]
+            dx = cx - px
+            dy = cy - py
+            r = math.sqrt(dx ** 2 + dy ** 2)
+            if not (r > 0.0 and r < z_max):
+                continue
+            # as in _cells_kernel: a fast arctangent within EPS decides, and any decision
+            # closer than EPS to its threshold is taken again with the exact bearing
+            sure = False
+            if not dn:
+                pa = _wrap(_atan2_fast(dy, dx) - h)
+                if abs(pa) < PI - EPS:
+                    if ci == pci + 1:  # the next cell of a row: step from its count
+                        pos = ppos
+                        while pos > 0 and sbearing[st + pos - 1] >= pa:
+                            pos -= 1
+                        while pos < n and sbearing[st + pos] < pa:
+                            pos += 1
+                    else:  # the bin table
+                        b = math.floor((pa + PI) * bin_scale)
+                        ib = int(b) if b > 0 else 0
+                        if ib > bins - 1:
+                            ib = bins - 1
+                        pos = bin_lo[t, ib]
+                        nxt = pos if pos < n - 1 else n - 1
+                        if pos < n and sbearing[st + nxt] < pa:
+                            pos += 1
+                    ppos = pos
+                    pci = ci
+                    k, diff, sure = _nearest_at(pos, st, n, pa, srt, sbearing)
+                if sure:
+                    if not continuous:
+                        lo_ = lo_t - 1e-9
+                        hi_ = hi_t + 1e-9
+                        if not wraps and (abs(pa - lo_) < EPS or abs(pa - hi_) < EPS):
+                            sure = False
+                        reach_ok = wraps or (pa >= lo_ and pa <= hi_)
+                        if abs(diff - wb2) < EPS:
+                            sure = False
+                        wide = diff > wb2
+                    else:
+                        zk = ranges[k]
+                        if r - zk >= lim:
+                            near = False
+                        elif abs(diff - PI / 2) < EPS:
+                            sure = False
+                        elif diff < PI / 2:
+                            g_ = r * math.sin(diff)
+                            if abs(g_ - lim) <= r * EPS + 1e-12:
+                                sure = False
+                            near = g_ < lim
+                        else:
+                            near = r < lim
+            if not sure:
+                phi = _wrap(math.atan2(dy, dx) - h)
+                if not (phi > -PI and phi < PI):
+                    continue
+                if not continuous:
+                    reach_ok = wraps or (phi >= lo_t - 1e-9 and phi <= hi_t + 1e-9)
+                k, diff = _nearest(t, phi, srt, key, seg_start, seg_len, bin_lo, dense,
+                                   sbearing, bin_scale, bins)
+                wide = diff > wb2
+                if continuous:
+                    zk = ranges[k]
+                    gap = r * math.sin(diff) if diff < PI / 2 else r
+                    if r - zk > gap:
+                        gap = r - zk
+                    near = gap < lim
+            else:
+                n_fast += 1
+            n_pairs += 1
+            zk = ranges[k]
+            if not continuous:
+                if not reach_ok:
+                    continue
+                outside = (r > min(z_max, zk + half)) or wide
+                hit = (not outside) and zk < z_max and abs(r - zk) < half
+                if hit:
+                    acc[ci, cls_hit[k]] += 1.0
+                elif (not outside) and r < zk and zk < z_max:
+                    acc[ci, free] += 1.0
+                continue
+            if near:
+                kk[slot] = k
+    pairs[0] += n_pairs
+    pairs[2] += n_fast
+
+
+@njit(cache=True, nogil=True)
+def _kernel_pass(c0, c1, cells, poses, nn, kk, ranges, cls_hit, l, step, count_kind, ka, kb,
+                 kc3, kinv2pi, sigma0, n_off, bcos, bsin, acc, pairs):  # pragma: no cover
+    """The continuous sums of cells c0:c1 from the nearest beams ``kk`` of :func:`_pose_pass`:
+    cell by cell, its poses in ``nn`` order, each pair's steps and sums as in
+    :func:`_cells_kernel` (so the same sums in the same order)."""
+    n_classes = acc.shape[1]
+    free = n_classes - 1
+    n_per = nn.shape[1]
+    s_end = np.zeros(n_classes)
+    s_off = np.zeros(n_off)
+    n_samp = 0
+    for ci in range(c0, c1):
+        cx = cells[ci, 0]
+        cy = cells[ci, 1]
+        for c in range(n_classes):
+            s_end[c] = 0.0
+        for o in range(n_off):
+            s_off[o] = 0.0
+        base = (ci - c0) * n_per
+        for q in range(n_per):
+            k = kk[base + q]
+            if k < 0:
+                continue
+            t = nn[ci, q]
+            px = poses[t, 0]
+            py = poses[t, 1]
+            dx = cx - px
+            dy = cy - py
+            zk = ranges[k]
+            c = bcos[k]
+            s = bsin[k]
+            d1 = math.sqrt((cx - (px + zk * c)) ** 2 + (cy - (py + zk * s)) ** 2)
+            if d1 < l:
+                s_end[cls_hit[k]] += _kernel(d1, ka, kb, kc3, kinv2pi, sigma0)
+            tt = dx * c + dy * s
+            e = dx * s - dy * c
+            if not (abs(e) < l and tt > -l and tt < zk + l):
+                continue
+            if count_kind == 3:  # arange_world
+                zw = math.sqrt((px - (px + zk * c)) ** 2 + (py - (py + zk * s)) ** 2)
+                cnt = max(math.ceil(zw / step), 0.0)
+                count = int(cnt)
+            elif count_kind == 2:  # arange
+                count = int(max(math.ceil(zk / step), 0.0))
+            else:
+                count = int(math.ceil(zk / step))
+                if (count - 1) * step >= zk:
+                    count -= 1
+                if count * step < zk:
+                    count += 1
+                if count_kind == 1 and count * step < zk + 1e-9:
+                    count += 1
+            j_lo = int(math.floor((tt - l) / step))
+            if j_lo < 0:
+                j_lo = 0
+            j_hi = int(math.ceil((tt + l) / step))
+            if j_hi > count - 1:
+                j_hi = count - 1
+            for o in range(n_off):
+                j = j_lo + o
+                if j > j_hi:
+                    break
+                sj = j * step
+                d2 = math.sqrt((cx - (px + sj * c)) ** 2 + (cy - (py + sj * s)) ** 2)
+                n_samp += 1
+                if d2 < l:
+                    s_off[o] += _kernel(d2, ka, kb, kc3, kinv2pi, sigma0)
+        for c in range(free):
+            acc[ci, c] += s_end[c]
+        for o in range(n_off):
+            acc[ci, free] += s_off[o]
+    pairs[1] += n_samp
+
+
+def _nn_pass(c0, c1, args, kargs, nn, continuous, acc, pairs):
+    """Cells c0:c1 with their poses ``nn``: :func:`_pose_pass`, then for the continuous models
+    :func:`_kernel_pass`, in blocks of at most ``PASS_PAIRS`` pairs (whole cells)."""
+    per = max(1, PASS_PAIRS // max(1, nn.shape[1]))
+    size = min(per, c1 - c0) * nn.shape[1]
+    ent = np.empty(size, np.int32)
+    kk = np.empty(size if continuous else 1, np.int32)
+    for a in range(c0, c1, per):
+        b = min(a + per, c1)
+        _pose_pass(a, b, *args, acc, kk, ent, pairs)
+        if continuous:
+            _kernel_pass(a, b, *kargs[:3], kk, *kargs[3:], acc, pairs)
+
+
 @njit(cache=True, nogil=True)
 def _poses_kernel(row0, row1, gx, gy, poses, reach, ranges, cls_hit, srt, key,
                   seg_start, seg_len, bin_lo, dense, sbearing, bin_scale, bins, continuous, z_max,
@@ -768,22 +1016,47 @@ def cell_evidence(cells, poses, nn, reach, table, cls_hit, n_classes, *, continu
     n_off = int(np.ceil(2 * l / step)) + 2
     from .sensor import BINS
     srt = table._sorted.astype(np.int64)
-    bcos, bsin = beam_directions(table, poses)
+    if continuous:
+        bcos, bsin = beam_directions(table, poses)
+        bcos, bsin = bcos[srt], bsin[srt]
+    else:  # the discrete models use no beam directions
+        bcos = bsin = np.zeros(1)
     # per-beam arrays in the sorted order of the bearing index: a pair's nearest beam is read
     # at its sorted position, with no indirection through the beam index
-    args = (cells, np.ascontiguousarray(poses, dtype=np.float64), nn,
-            np.ascontiguousarray(reach, dtype=np.float64), table.ranges[srt],
-            np.ascontiguousarray(cls_hit, dtype=np.int64)[srt], srt, table._key,
-            table._seg_start.astype(np.int64), table._seg_len.astype(np.int64), table._bin_lo,
-            table._dense, table._sorted_bearing, BINS / TWO_PI, BINS, bool(continuous),
-            float(z_max), float(w_obstacle) / 2, float(w_beam) / 2, table.bearing_min,
-            table.bearing_max, float(l), float(step), COUNT_KINDS[sample_count],
-            2.0 * np.pi / l, -1.0 / (3.0 * l), 1.0 / 3.0, 1.0 / (2.0 * np.pi), float(sigma0),
-            n_off, bcos[srt], bsin[srt])
-    warm(_cells_kernel if grid is None or nn.shape[0] else _poses_kernel)
+    pposes = np.ascontiguousarray(poses, dtype=np.float64)
+    ranges = table.ranges[srt]
+    hit = np.ascontiguousarray(cls_hit, dtype=np.int64)[srt]
+    seg_start = table._seg_start.astype(np.int64)
+    seg_len = table._seg_len.astype(np.int64)
+    args = (cells, pposes, nn, np.ascontiguousarray(reach, dtype=np.float64), ranges, hit, srt,
+            table._key, seg_start, seg_len, table._bin_lo, table._dense, table._sorted_bearing,
+            BINS / TWO_PI, BINS, bool(continuous), float(z_max), float(w_obstacle) / 2,
+            float(w_beam) / 2, table.bearing_min, table.bearing_max, float(l), float(step),
+            COUNT_KINDS[sample_count], 2.0 * np.pi / l, -1.0 / (3.0 * l), 1.0 / 3.0,
+            1.0 / (2.0 * np.pi), float(sigma0), n_off, bcos, bsin)
     n = len(cells)
     nt = min(threads() if n_threads is None else int(n_threads), max(1, n // 256))
-    if nn.shape[0] == 0 and grid is not None:
+    if nn.shape[0]:  # the nearest poses: pose by pose, then the sums cell by cell
+        warm(_pose_pass, _kernel_pass)
+        pargs = (cells, pposes, nn, ranges, hit, srt, table._key, seg_start, seg_len,
+                 table._bin_lo, table._dense, table._sorted_bearing, BINS / TWO_PI, BINS,
+                 bool(continuous), float(z_max), float(w_obstacle) / 2, float(w_beam) / 2,
+                 table.bearing_min, table.bearing_max, float(l))
+        kargs = (cells, pposes, nn, ranges, hit, float(l), float(step),
+                 COUNT_KINDS[sample_count], 2.0 * np.pi / l, -1.0 / (3.0 * l), 1.0 / 3.0,
+                 1.0 / (2.0 * np.pi), float(sigma0), n_off, bcos, bsin)
+        bounds = np.linspace(0, n, nt + 1).astype(int)
+        pairs = np.zeros((nt, 3), np.int64)
+        run = lambda i: _nn_pass(bounds[i], bounds[i + 1], pargs, kargs, nn, continuous, acc,
+                                 pairs[i])
+        if nt <= 1:
+            run(0)
+        else:
+            with ThreadPoolExecutor(nt) as ex:
+                list(ex.map(run, range(nt)))
+        pairs = pairs.sum(axis=0)
+    elif grid is not None:
+        warm(_poses_kernel)
         ny = len(grid.y)
         nt = min(nt, ny)
         rest = args[3:] + (acc, np.zeros((n, n_classes)) if continuous else np.zeros((1, 1)),
@@ -799,9 +1072,11 @@ def cell_evidence(cells, poses, nn, reach, table, cls_hit, n_classes, *, continu
                 list(ex.map(run, range(nt)))
         pairs = pairs.sum(axis=0)
     elif nt <= 1:
+        warm(_cells_kernel)
         pairs = np.zeros(3, np.int64)
         _cells_kernel(0, n, *args, acc, pairs)
     else:
+        warm(_cells_kernel)
         bounds = np.linspace(0, n, nt + 1).astype(int)
         pairs = np.zeros((nt, 3), np.int64)
         with ThreadPoolExecutor(nt) as ex:
