@@ -26,7 +26,8 @@ In a notebook::
 start as a PNG. The stills of the static book (``notebooks/_static/t2_explorer.png``,
 ``t4_explorer.png``) are screenshots of the explorer live in Notebook 7 (headless Chromium
 through selenium, after a click on the cell at (-9, -18.5) m), so that they show the sliders and
-the evidence table as a reader sees them.
+the evidence table as a reader sees them; ``python scripts/explorer_stills.py`` retakes both
+(a Notebook 7 server on localhost, the chapters' explorer cells, the click through ipyevents).
 """
 from __future__ import annotations
 
