@@ -35,7 +35,7 @@ import sys
 import numpy as np
 from numba import njit
 
-from ..core.kernel import _PIECES, _pieces
+from ..core.kernel import _DEGREE, _PIECES, _pieces
 
 _OFF = 1 << 20   # leaf / block index offset of the packed keys (as training.py, voxelmap.py)
 
@@ -209,192 +209,172 @@ def _codes(base, lo, dims):  # pragma: no cover - compiled
 
 
 @njit(cache=True, nogil=True)
-def _scan_evidence(points, labels, base, order, t0, t1, x0, x1, codes, lo, dims, R, res, ell2,
-                   scale, sf2, table, counting, dense_k, rank):  # pragma: no cover - compiled
-    """Per-scan evidence in a sparse form. The points ``order[t0:t1]`` are visited in that order
-    (raveled voxel order, stable), per point the offsets in lexicographic order (for ``R >= 2``
-    all ``(2R + 1)^3`` distances are taken and those below ell kept without a branch per offset;
-    the same pairs, distances and order); ``counting``
-    (S-CSM): every point adds 1 to its own voxel (``R`` = 0), else the kernel weight to every
-    voxel within ell. Only voxels with x index in ``[x0, x1)`` are summed (a thread's share).
-    ``rank`` (at least the box's size, all -1) maps a voxel's raveled code to its local voxel
-    while the scan is summed; its entries are set back to -1 before returning.
+def _kernel(d2, scale, sf2, table):  # pragma: no cover - compiled
+    """The sparse kernel at squared distance ``d2 < ell^2`` [m^2] as :func:`sparse_kernel_pieces`
+    rounds it: ``r = d P / ell`` (``scale = P / ell``), its piece ``j`` and ``u = r - j - 1/2``,
+    the piece's polynomial by Horner from the top (the degree a constant: unrolled), times sf2,
+    clamped at 0."""
+    r = np.sqrt(d2) * scale
+    j = int(r)
+    if j > _PIECES - 1:
+        j = _PIECES - 1
+    u = r - j
+    u -= 0.5
+    k = table[j, _DEGREE] * u
+    for h in range(_DEGREE - 1, 0, -1):
+        k += table[j, h]
+        k *= u
+    k += table[j, 0]
+    k *= sf2
+    if k < 0.0:
+        k = 0.0
+    return k
 
+
+@njit(cache=True, nogil=True)
+def _scan_evidence(points, labels, base, order, t0, t1, x0, x1, codes, lo, dims, R, res, ell2,
+                   scale, sf2, table, counting, dense_k, rank, vloc, vcnt, c0, w0, more, vcode,
+                   acc, ecls, evalue, enext):  # pragma: no cover - compiled
+    """Per-scan evidence in a sparse form. The points ``order[t0:t1]`` (raveled voxel order,
+    stable) are taken voxel by voxel: for each voxel ``S`` of points and each offset ``o``
+    (lexicographic), the target voxel ``S + o`` gets the weights of the points of ``S`` within
+    ell of its centre, in their order. Every (voxel, class) thus sums the same weights in the same
+    order as point by point, offset by offset (the contributions to one voxel come in the points'
+    order either way). ``counting`` (S-CSM): every point adds 1 to its own voxel (``R`` = 0).
+    Only voxels with x index in ``[x0, x1)`` are summed (a thread's share). ``rank`` (at least
+    the box's size, all -1) maps a voxel's raveled code to its local voxel while the scan is
+    summed; its entries are set back to -1 before returning.
+
+    ``vloc`` .. ``enext`` are scratch arrays kept by the caller (``vloc`` at least 64 per block
+    the scan can touch, ``vcnt`` .. ``vcode`` at least one per voxel it can touch, ``acc``
+    ``dense_k`` per voxel); the list arrays ``ecls``, ``evalue``, ``enext`` grow here when full.
     Returns ``blk`` (per block of the scan's box of 4^3-voxel blocks: its local block, -1 if not
     touched), ``vloc`` (per local block and voxel in it: the local voxel, -1 if not touched) and
     per local voxel its pair count ``vcnt``, first class ``c0`` and its summed weight ``w0`` and
-    the head ``more`` of a list of further (class ``ecls``, sum ``evalue``, next ``enext``).
+    the head ``more`` of a list of further (class ``ecls``, sum ``evalue``, next ``enext``), as
+    views of the scratch, then the three list arrays themselves (to keep when they grew).
     With ``dense_k`` > 0 (few classes), the sums are kept per local voxel and class in ``acc``
     (``dense_k`` per voxel, from 0) instead, and ``c0``, ``w0``, ``more`` and the list are empty."""
-    n = points.shape[0]
     blo0, blo1, blo2 = lo[0] >> 2, lo[1] >> 2, lo[2] >> 2
     bd0 = ((lo[0] + dims[0] - 1) >> 2) - blo0 + 1
     bd1 = ((lo[1] + dims[1] - 1) >> 2) - blo1 + 1
     bd2 = ((lo[2] + dims[2] - 1) >> 2) - blo2 + 1
     blk = np.full(bd0 * bd1 * bd2, -1, np.int32)
     w = 2 * R + 1
-    cap = max(1, min((t1 - t0) * w * w * w, dims[0] * dims[1] * dims[2]))  # voxels touched, bound
-    vloc = np.empty(min(cap, bd0 * bd1 * bd2) * 64, np.int32)
-    vcnt = np.empty(cap, np.int64)
-    c0 = np.empty(cap, np.int32)
-    w0 = np.empty(cap)
-    more = np.empty(cap, np.int32)
-    acc = np.empty(cap * dense_k)
-    ecap = 1024
-    ecls = np.empty(ecap, np.int32)
-    evalue = np.empty(ecap)
-    enext = np.empty(ecap, np.int32)
-    vcode = np.empty(cap, np.int64)          # raveled code of each local voxel
     s1 = dims[1] * dims[2]
     nb = 0
     nv = 0
     ne = 0
-    top = table.shape[0] - 1
-    deg = table.shape[1] - 1
-    # per point: the offsets o (lexicographic index) within ell and their kernel weights
-    m_o = np.empty(w * w * w, np.int64)
-    m_d2 = np.empty(w * w * w)
-    m_k = np.empty(w * w * w)
-    sxa = np.empty(w)
-    sya = np.empty(w)
-    sza = np.empty(w)
-    for t in range(t0, t1):
+    ecap = ecls.shape[0]
+    cap = 16                           # points of one voxel held at a time (grows)
+    sq = np.empty((cap, 3, w))        # per point, axis and offset: the squared distance
+    low = np.zeros((3, w))            # per axis and offset: its smallest over the voxel's points
+    t = t0
+    while t < t1:
         i = order[t]
-        px, py, pz = points[i, 0], points[i, 1], points[i, 2]
+        code = codes[i]
+        u = t + 1
+        while u < t1 and codes[order[u]] == code:
+            u += 1
+        n = u - t
         bx, by, bz = base[i, 0], base[i, 1], base[i, 2]
-        c = labels[i]
-        m = 0
-        if counting:   # the point's own voxel (R = 0), when it is in this share
-            m_o[0] = 0
-            m_k[0] = 1.0
-            m = 1 if x0 <= bx < x1 else 0
-        elif R <= 1:   # few offsets: test them one by one, skipping rows out of reach
-            o = -1
-            for ox in range(-R, R + 1):
-                dx = px - (bx + (ox + 0.5)) * res
-                sx = dx * dx
-                if sx >= ell2 or bx + ox < x0 or bx + ox >= x1:
-                    o += w * w
-                    continue
-                for oy in range(-R, R + 1):
-                    dy = py - (by + (oy + 0.5)) * res
-                    sxy = sx + dy * dy
-                    if sxy >= ell2:
-                        o += w
-                        continue
-                    for oz in range(-R, R + 1):
-                        o += 1
-                        dz = pz - (bz + (oz + 0.5)) * res
-                        d2 = sxy + dz * dz
-                        if d2 < ell2:
-                            m_o[m] = o
-                            m_d2[m] = d2
-                            m += 1
-        else:          # many offsets: every distance, the ones within ell kept without branches
-            for q in range(w):
-                dx = px - (bx + ((q - R) + 0.5)) * res
-                sxa[q] = dx * dx
-                dy = py - (by + ((q - R) + 0.5)) * res
-                sya[q] = dy * dy
-                dz = pz - (bz + ((q - R) + 0.5)) * res
-                sza[q] = dz * dz
-            o = 0
-            for qa in range(w):
-                inside = bx + qa - R >= x0 and bx + qa - R < x1
-                for qb in range(w):
-                    sxy = sxa[qa] + sya[qb]
-                    for qc in range(w):
-                        d2 = sxy + sza[qc]
-                        m_o[m] = o
-                        m_d2[m] = d2
-                        m += (d2 < ell2) and inside
-                        o += 1
         if not counting:
-            for q in range(m):
-                # the kernel's piece j and u = x P - j - 1/2, as sparse_kernel_pieces
-                r = np.sqrt(m_d2[q]) * scale
-                j = int(r)
-                if j > top:
-                    j = top
-                u = r - j
-                u -= 0.5
-                k = table[j, deg] * u
-                for h in range(deg - 1, 0, -1):
-                    k += table[j, h]
-                    k *= u
-                k += table[j, 0]
-                k *= sf2
-                if k < 0.0:
-                    k = 0.0
-                m_k[q] = k
-        for q in range(m):
-            o = m_o[q]
-            k = m_k[q]
-            ox = o // (w * w) - R
-            oy = (o // w) % w - R
-            oz = o % w - R
-            code = codes[i] + ox * s1 + oy * dims[2] + oz
-            v = rank[code]
-            if v < 0:
-                vx, vy, vz = bx + ox, by + oy, bz + oz
-                bc = (((vx >> 2) - blo0) * bd1 + ((vy >> 2) - blo1)) * bd2 + ((vz >> 2) - blo2)
-                lb = blk[bc]
-                if lb < 0:
-                    lb = nb
-                    blk[bc] = lb
-                    vloc[lb * 64: lb * 64 + 64] = -1
-                    nb += 1
-                li = lb * 64 + (((vx & 3) << 4) | ((vy & 3) << 2) | (vz & 3))
-                v = vloc[li]
-                if v < 0:
-                    v = nv
-                    vloc[li] = v
-                    vcnt[v] = 0
-                    c0[v] = c
-                    w0[v] = 0.0
-                    more[v] = -1
-                    for cq in range(dense_k):
-                        acc[v * dense_k + cq] = 0.0
-                    vcode[v] = code
-                    nv += 1
-                rank[code] = v
-            vcnt[v] += 1
-            if dense_k:
-                acc[v * dense_k + c] += k
+            if n > cap:
+                cap = 2 * n
+                sq = np.empty((cap, 3, w))
+            for a in range(w):
+                low[0, a] = np.inf
+                low[1, a] = np.inf
+                low[2, a] = np.inf
+            for p in range(n):
+                q = order[t + p]
+                for a in range(w):
+                    dx = points[q, 0] - (bx + ((a - R) + 0.5)) * res
+                    dy = points[q, 1] - (by + ((a - R) + 0.5)) * res
+                    dz = points[q, 2] - (bz + ((a - R) + 0.5)) * res
+                    sq[p, 0, a] = dx * dx
+                    sq[p, 1, a] = dy * dy
+                    sq[p, 2, a] = dz * dz
+                    low[0, a] = min(low[0, a], dx * dx)
+                    low[1, a] = min(low[1, a], dy * dy)
+                    low[2, a] = min(low[2, a], dz * dz)
+        for a in range(w):
+            vx = bx + a - R
+            if low[0, a] >= ell2 or vx < x0 or vx >= x1:
                 continue
-            if c0[v] == c:
-                w0[v] += k
-                continue
-            e = more[v]
-            while e >= 0 and ecls[e] != c:
-                e = enext[e]
-            if e < 0:
-                if ne == ecap:
-                    ecap *= 2
-                    g = np.empty(ecap, np.int32)
-                    g[:ne] = ecls[:ne]
-                    ecls = g
-                    g = np.empty(ecap, np.int32)
-                    g[:ne] = enext[:ne]
-                    enext = g
-                    f = np.empty(ecap)
-                    f[:ne] = evalue[:ne]
-                    evalue = f
-                e = ne
-                ecls[e] = c
-                evalue[e] = 0.0
-                enext[e] = more[v]
-                more[v] = e
-                ne += 1
-            evalue[e] += k
+            for b in range(w):
+                if low[0, a] + low[1, b] >= ell2:   # no point of S within ell of this row
+                    continue
+                vy = by + b - R
+                for cz in range(w):
+                    vz = bz + cz - R
+                    tcode = code + (a - R) * s1 + (b - R) * dims[2] + (cz - R)
+                    v = -1
+                    for p in range(n):
+                        if counting:
+                            k = 1.0
+                        else:
+                            d2 = (sq[p, 0, a] + sq[p, 1, b]) + sq[p, 2, cz]
+                            if d2 >= ell2:
+                                continue
+                            k = _kernel(d2, scale, sf2, table)
+                        c = labels[order[t + p]]
+                        if v < 0:
+                            v = rank[tcode]
+                        if v < 0:    # the voxel's first pair of this scan (its block's, maybe)
+                            bc = (((vx >> 2) - blo0) * bd1 + ((vy >> 2) - blo1)) * bd2 + ((vz >> 2) - blo2)
+                            lb = blk[bc]
+                            if lb < 0:
+                                lb = nb
+                                blk[bc] = lb
+                                vloc[lb * 64: lb * 64 + 64] = -1
+                                nb += 1
+                            v = nv
+                            vloc[lb * 64 + (((vx & 3) << 4) | ((vy & 3) << 2) | (vz & 3))] = v
+                            vcnt[v] = 0
+                            c0[v] = c
+                            w0[v] = 0.0
+                            more[v] = -1
+                            for cq in range(dense_k):
+                                acc[v * dense_k + cq] = 0.0
+                            vcode[v] = tcode
+                            rank[tcode] = v
+                            nv += 1
+                        vcnt[v] += 1
+                        if dense_k:
+                            acc[v * dense_k + c] += k
+                            continue
+                        if c0[v] == c:
+                            w0[v] += k
+                            continue
+                        e = more[v]
+                        while e >= 0 and ecls[e] != c:
+                            e = enext[e]
+                        if e < 0:
+                            if ne == ecap:
+                                ecap *= 2
+                                g = np.empty(ecap, np.int32)
+                                g[:ne] = ecls[:ne]
+                                ecls = g
+                                g = np.empty(ecap, np.int32)
+                                g[:ne] = enext[:ne]
+                                enext = g
+                                f = np.empty(ecap)
+                                f[:ne] = evalue[:ne]
+                                evalue = f
+                            e = ne
+                            ecls[e] = c
+                            evalue[e] = 0.0
+                            enext[e] = more[v]
+                            more[v] = e
+                            ne += 1
+                        evalue[e] += k
+        t = u
     for v in range(nv):
         rank[vcode[v]] = -1
-    if dense_k:
-        nc = 0
-    else:
-        nc = nv
+    nc = 0 if dense_k else nv
     return (blk, vloc[:nb * 64], vcnt[:nv], c0[:nc], w0[:nc], more[:nc], ecls[:ne], evalue[:ne],
-            enext[:ne], acc[:nv * dense_k])
+            enext[:ne], acc[:nv * dense_k], ecls, evalue, enext)
 
 
 @njit(cache=True, nogil=True)
@@ -403,8 +383,6 @@ def _pairs(points, labels, base, lo, dims, R, res, ell2, scale, sf2, table, seen
     ``seen[code] = True``; with it, add ``k(d)`` to ``add[rank[code], label]`` and 1 to
     ``cnt[rank[code]]``. ``code`` is the voxel's raveled index in the box."""
     marking = rank.shape[0] == 0
-    top = table.shape[0] - 1
-    deg = table.shape[1] - 1
     for i in range(points.shape[0]):
         px, py, pz = points[i, 0], points[i, 1], points[i, 2]
         bx, by, bz = base[i, 0], base[i, 1], base[i, 2]
@@ -429,21 +407,7 @@ def _pairs(points, labels, base, lo, dims, R, res, ell2, scale, sf2, table, seen
                     if marking:
                         seen[cxy + oz] = True
                         continue
-                    # the kernel's piece j and u = x P - j - 1/2, as sparse_kernel_pieces
-                    r = np.sqrt(d2) * scale
-                    j = int(r)
-                    if j > top:
-                        j = top
-                    u = r - j
-                    u -= 0.5
-                    k = table[j, deg] * u
-                    for q in range(deg - 1, 0, -1):
-                        k += table[j, q]
-                        k *= u
-                    k += table[j, 0]
-                    k *= sf2
-                    if k < 0.0:
-                        k = 0.0
+                    k = _kernel(d2, scale, sf2, table)
                     v = rank[cxy + oz]
                     add[v, c] += k
                     cnt[v] += 1
@@ -615,40 +579,75 @@ dense array (no per-pair search of the class); beyond, the first class of each v
 a list for the others (a voxel rarely sees more than one or two of 20 classes)."""
 
 
+def _scratch(store: list, j: int, n_vox: int, n_blk: int, dense_k: int):
+    """Scratch arrays of job ``j`` for :func:`_scan_evidence` with room for ``n_vox`` voxels and
+    ``n_blk`` blocks, kept in ``store`` from scan to scan (grown by a quarter at least when short;
+    pages never written cost no memory)."""
+    while len(store) <= j:
+        store.append(None)
+    have = store[j]
+    if (have is None or len(have[1]) < n_vox or len(have[0]) < 64 * n_blk
+            or len(have[6]) < n_vox * dense_k):
+        old = (0, 0) if have is None else (len(have[1]), len(have[0]) // 64)
+        nv = max(n_vox, old[0] + old[0] // 4)
+        nb = max(n_blk, old[1] + old[1] // 4)
+        lists = have[7:] if have is not None else (np.empty(1024, np.int32), np.empty(1024),
+                                                   np.empty(1024, np.int32))
+        have = (np.empty(64 * nb, np.int32), np.empty(nv, np.int64), np.empty(nv, np.int32),
+                np.empty(nv), np.empty(nv, np.int32), np.empty(nv, np.int64),
+                np.empty(nv * dense_k)) + tuple(lists)
+        store[j] = have
+    return have
+
+
 def scan_evidence(points, labels, base, lo, dims, R: int, resolution: float, ell: float,
                   sf2: float, counting: bool, n_threads: int | None = None, num_class: int = 0,
-                  rank: np.ndarray | None = None):
+                  rank: np.ndarray | None = None, scratch: list | None = None):
     """The sparse evidence of one scan's training points (see :func:`_scan_evidence`), as a list
     of parts, one per thread, whose blocks follow each other in key order (x slabs of blocks).
     ``rank``: an int32 scratch array of -1 at least as long as the box (``prod(dims)``), kept by the
-    caller from scan to scan (the threads use disjoint parts of it); by default a new one."""
+    caller from scan to scan (the threads use disjoint parts of it); by default a new one.
+    ``scratch``: a list the caller keeps from scan to scan (the parts are views of it, valid until
+    the next call with it); by default new arrays."""
     global _pool
     lo = np.ascontiguousarray(lo, dtype=np.int64)
     dims = np.ascontiguousarray(dims, dtype=np.int64)
     codes = _codes(base, lo, dims)
-    order, scodes = stable_order(codes, int(np.prod(dims)) - 1)
+    n_box = int(np.prod(dims))
+    order, scodes = stable_order(codes, n_box - 1)
     n_threads = threads() if n_threads is None else max(1, int(n_threads))
     # x ranges of whole blocks, cut at the points' quantiles: [x_0, x_1), [x_1, x_2), ...
     bx = lo[0] + scodes // (dims[1] * dims[2])          # voxel x of the sorted points
     cuts = np.unique(np.quantile(bx, np.arange(1, n_threads) / n_threads).astype(np.int64) >> 2) << 2
     edges = [int(lo[0])] + [int(c) for c in cuts if lo[0] < c < lo[0] + dims[0]] + [int(lo[0] + dims[0])]
-    if rank is None or len(rank) < int(np.prod(dims)):
-        rank = np.full(int(np.prod(dims)), -1, np.int32)
+    if rank is None or len(rank) < n_box:
+        rank = np.full(n_box, -1, np.int32)
+    dense_k = int(num_class) if 0 < num_class <= DENSE_CLASSES else 0
     const = (codes, lo, dims, int(R), float(resolution), float(ell) ** 2, _PIECES / float(ell),
-             float(sf2), _pieces(), bool(counting),
-             int(num_class) if 0 < num_class <= DENSE_CLASSES else 0, rank)
+             float(sf2), _pieces(), bool(counting), dense_k, rank)
+    n_blk = int(np.prod(((lo + dims - 1) >> 2) - (lo >> 2) + 1))
+    w3 = (2 * int(R) + 1) ** 3
+    store = [] if scratch is None else scratch
     jobs = []
-    for x0, x1 in zip(edges[:-1], edges[1:]):
+    for j, (x0, x1) in enumerate(zip(edges[:-1], edges[1:])):
         t0 = int(np.searchsorted(bx, x0 - R, "left"))   # the points within R voxels of the range
         t1 = int(np.searchsorted(bx, x1 + R - 1, "right"))
-        jobs.append((points, labels, base, order, t0, t1, x0, x1) + const)
+        n_vox = max(1, min((t1 - t0) * w3, n_box))       # voxels the job can touch, at most
+        jobs.append((points, labels, base, order, t0, t1, x0, x1) + const
+                    + _scratch(store, j, n_vox, min(n_vox, n_blk), dense_k))
+
+    def run(j):
+        out = _scan_evidence(*jobs[j])
+        store[j] = store[j][:7] + out[10:]              # the list arrays, grown or not
+        return out[:10]
+
     if len(jobs) == 1:
-        return [_scan_evidence(*jobs[0])]
+        return [run(0)]
     if _pool is None or _pool._max_workers < len(jobs):
         from concurrent.futures import ThreadPoolExecutor
         _pool = ThreadPoolExecutor(len(jobs))
-    return list(_pool.map(lambda a: _scan_evidence(*a), jobs))
+    return list(_pool.map(run, range(len(jobs))))
 
 
-KERNELS = (_pairs, _leaf_keys, _group, _lengths, _free_samples, _bases, _codes, _scan_evidence,
+KERNELS = (_kernel, _pairs, _leaf_keys, _group, _lengths, _free_samples, _bases, _codes, _scan_evidence,
            _count_new, _apply)

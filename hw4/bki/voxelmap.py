@@ -154,6 +154,7 @@ class VoxelMap:
         self.engine = engine
         self.threads = threads   # compiled engine; None: HW4_THREADS (default 1)
         self._rank = None        # compiled engine: voxel code -> local voxel while a scan is summed
+        self._scratch = []       # compiled engine: per thread, the scratch of a scan's sums
         for nm, v in (("resolution", resolution), ("ell", ell), ("sf2", sf2), ("prior", prior)):
             if not (np.isfinite(v) and v > 0):
                 raise InputError(f"{nm} must be a positive number; got {v}.")
@@ -241,7 +242,7 @@ class VoxelMap:
             self._rank = np.full(grown, -1, np.int32) if n_box <= _KEEP_RANK else None
         parts = scan_evidence(np.ascontiguousarray(points), np.ascontiguousarray(labels), base, lo,
                               dims, R, self.resolution, self.ell, self.sf2, self.method == "scsm",
-                              self.threads, self.num_class, self._rank)
+                              self.threads, self.num_class, self._rank, self._scratch)
         blo = lo >> _SHIFT
         bdims = tuple(int(x) for x in ((lo + dims - 1) >> _SHIFT) - blo + 1)
         for blk, vloc, vcnt, c0, w0, more, ecls, evalue, enext, acc in parts:
