@@ -372,3 +372,25 @@ def test_rviz_screenshot_prints_its_panel_enlarged_beside_the_map(sources, tmp_p
     with pytest.raises(InputError, match="not the 1854 x 1056 px window"):
         report.rviz_view_and_panel(small, tmp_path / "x.png")
     assert not (tmp_path / "x.png").exists()
+
+
+def test_a_marker_can_fix_a_figures_placement(sources):
+    """``place=H`` on a marker: the figure is preceded by the raw LaTeX that gives it that
+    placement (defined in the report's preamble); figures without it keep Sphinx's."""
+    import yaml
+    out, _ = sources
+    cells = _nb(out / "task2.ipynb")["cells"]
+    names = [c.get("metadata", {}).get("mystnb", {}).get("figure", {}).get("name") for c in cells]
+    before = cells[names.index("fig-t2-res-027") - 1]
+    assert before["cell_type"] == "markdown"
+    assert before["source"].rstrip().endswith("```{raw} latex\n\\hwNextFigure{H}\n```")
+    plain = cells[names.index("fig-t2-map") - 1]
+    assert "hwNextFigure" not in plain["source"]
+    t5 = "".join(c["source"] for c in _nb(out / "task5.ipynb")["cells"]
+                 if c["cell_type"] == "markdown")
+    assert re.search(r"\\hwNextFigure\{H\}\n```\n+```\{figure\} [^\n]*\n:name: fig-t5-rviz-close", t5)
+    preamble = yaml.safe_load((out / "_config.yml").read_text())["sphinx"]["config"][
+        "latex_elements"]["preamble"]
+    assert r"\newcommand{\hwNextFigure}" in preamble
+    with pytest.raises(InputError, match="fig-t1-nowhere"):
+        report._plan(1, "<!-- figure: fig-t1-nowhere place=H -->\n", {"cells": []})

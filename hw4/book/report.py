@@ -13,7 +13,9 @@ builds it into ``_build/hw4_report.pdf``. Each task notebook is made of
    figure cell (its stored image and caption, code removed) or table block of that name
    (myst-nb ``mystnb.figure.name`` metadata, or a ``:name:`` option). ``<!-- figure: A or B C -->``
    takes A when the chapter has it, else B and C; a name may end in ``*`` (every match, in
-   chapter order); ``<!-- figure: NAME width=85% -->`` prints it at that share of the text width.
+   chapter order); ``<!-- figure: NAME width=85% -->`` prints it at that share of the text width,
+   and ``place=H`` (after the width, if any) gives it that LaTeX float placement instead of the
+   report's ``!htbp`` (``H``: exactly there, between the paragraphs around the marker).
    A figure marker may be followed at once by the report's own caption for it,
    ``<!-- caption`` ... ``-->`` (the caption written for the grader, instead of the chapter's).
 
@@ -311,9 +313,13 @@ def _plan(task: int, text: str, nb: dict) -> list[tuple]:
     for i in range(1, len(parts), 3):
         kind, spec, after = parts[i], parts[i + 1], parts[i + 2]
         pool = list(figures) if kind == "figure" else list(tables)
+        place = re.search(r"\s+place=([htbpH!]+)$", spec)
+        if place:
+            spec = spec[:place.start()]
         width = re.search(r"\s+width=(\d+%)$", spec)
         if width:
             spec = spec[:width.start()]
+        options = ([width.group(1)] if width else []) + ([f"place={place.group(1)}"] if place else [])
         names = _pick(spec, pool, videos)
         if not names:
             raise InputError(f"report/task{task}.md asks for the {kind} {spec!r}, which "
@@ -325,7 +331,7 @@ def _plan(task: int, text: str, nb: dict) -> list[tuple]:
                 raise InputError(f"report/task{task}.md gives one caption to the {len(names)} "
                                  f"figures of {spec!r}; give each its own marker.")
         for name in names:
-            pieces.append((kind, name if not width else f"{name} {width.group(1)}",
+            pieces.append((kind, " ".join([name] + options),
                            " ".join(caption.group(1).split()) if caption else None))
         pieces.append(("md", after))
     return pieces
@@ -362,8 +368,12 @@ def task_notebook(task: int, text: str, nb: dict, equations: dict[str, str],
         if kind == "md":
             md.append(item)
             continue
-        item, *width = item.split()
+        item, *opts = item.split()
+        width = [o for o in opts if not o.startswith("place=")]
+        place = [o[len("place="):] for o in opts if o.startswith("place=")]
         own = own[0]
+        if place and kind == "figure":  # the next figure's placement (REPORT_PREAMBLE)
+            md.append("\n```{raw} latex\n\\hwNextFigure{" + place[0] + "}\n```\n")
         if kind == "table":
             md.append("\n" + _fix_refs(tables[item], defined, equations,
                                        f"table {item} of {TASKS[task]}") + "\n")
@@ -430,6 +440,14 @@ REPORT_PREAMBLE = r"""
   \renewcommand{\subsectionmark}[1]{}\markboth{}{}}
 \renewcommand{\@makeschapterhead}[1]{{\parindent\z@\raggedright\normalfont\LARGE\bfseries
   #1\par\nobreak\vskip 10\p@}}
+% \hwNextFigure{H} before a figure: that figure takes the placement H instead of the one
+% Sphinx writes (the report's figure_align); the figures after it take Sphinx's again
+\def\hw@place{}
+\newcommand{\hwNextFigure}[1]{\gdef\hw@place{#1}}
+\let\hw@figure\figure
+\def\figure{\ifx\hw@place\@empty\expandafter\hw@figure\else\expandafter\hw@figure@placed\fi}
+\def\hw@figure@placed[#1]{\edef\reserved@b{\noexpand\hw@figure[\hw@place]}\gdef\hw@place{}%
+  \reserved@b}
 \makeatother
 """
 
