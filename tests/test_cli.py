@@ -104,3 +104,62 @@ def test_run_with_a_damaged_data_cache_rebuilds_it_and_gives_the_same_map(tmp_pa
     a, b = (np.load(tmp_path / d / "task1_grid0.5.npz") for d in "ab")
     for k in a.files:
         np.testing.assert_array_equal(a[k], b[k])
+
+
+
+_DRAW = """
+import inspect, sys
+from hw4 import cli
+if sys.argv[1] == "without docstrings":
+    cli._import_figure_classes()
+from hw4.core import plotting
+from hw4.tasks import build_map
+for task in (1, 3):
+    ogm = build_map(task, 0.5)
+    for what in ("mean", "variance"):
+        plotting.save_map_png(ogm, f"{sys.argv[2]}/{task}_{what}.png", what, f"{ogm.name} {what}")
+import matplotlib.artist as artist
+from matplotlib import _docstring
+from matplotlib.lines import Line2D
+class Mine(artist.Artist):  # defined after the import: gets its generated set() as usual
+    def set_colour_name(self, name):
+        self.colour_name = name
+line = Line2D([0, 1], [0, 1])
+line.set(lw=3.5, color="r")  # aliases and properties work whatever the docstrings
+print(line.get_linewidth(), line.get_color(), "colour_name" in inspect.signature(Mine.set).parameters,
+      "linewidth" in inspect.signature(Line2D.set).parameters, artist.kwdoc(Line2D) != "",
+      any(v == "" for k, v in _docstring.interpd.params.items() if k.endswith(":kwdoc")))
+"""
+
+
+def test_figure_code_imported_without_docstrings_draws_the_same_pngs(tmp_path):
+    """The CLI imports matplotlib without its import-time docstrings: the same PNG bytes, set()
+    and aliases working, matplotlib's hooks restored for what is defined afterwards."""
+    out = {}
+    for mode in ("as it is", "without docstrings"):
+        folder = tmp_path / mode.replace(" ", "_")
+        folder.mkdir()
+        r = subprocess.run([sys.executable, "-c", _DRAW, mode, str(folder)], capture_output=True,
+                           text=True, cwd=ROOT, env={"MPLBACKEND": "Agg", "PATH": "/usr/bin:/bin",
+                                                     "PYTHONPATH": str(ROOT)})
+        assert r.returncode == 0, r.stderr
+        out[mode] = r.stdout.split(), _files(folder)
+    (plain, as_is), (skipped, without) = out["as it is"], out["without docstrings"]
+    assert sorted(as_is) == ["1_mean.png", "1_variance.png", "3_mean.png", "3_variance.png"]
+    assert without == as_is  # byte for byte
+    assert plain == ["3.5", "r", "True", "True", "True", "False"]
+    # skipped at import: Line2D.set has the generic signature; all else as matplotlib has it
+    assert skipped == ["3.5", "r", "True", "False", "True", "False"]
+
+
+def _files(folder):
+    return {p.name: p.read_bytes() for p in sorted(folder.iterdir())}
+
+
+def test_cli_imports_matplotlib_without_docstrings_only_when_it_is_not_loaded():
+    code = ("import matplotlib.figure, inspect\nfrom matplotlib.lines import Line2D\n"
+            "from hw4 import cli\ncli._plotting()\n"
+            "print('linewidth' in inspect.signature(Line2D.set).parameters)")
+    r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=ROOT,
+                       env={"MPLBACKEND": "Agg", "PATH": "/usr/bin:/bin", "PYTHONPATH": str(ROOT)})
+    assert r.returncode == 0 and r.stdout.split() == ["True"], r.stderr
