@@ -180,6 +180,102 @@ def _free_samples(hits, origin, length, fr):  # pragma: no cover - compiled
 
 
 @njit(cache=True, nogil=True)
+def _free_leaves(hits, origin, length, fr, size):  # pragma: no cover - compiled
+    """The leaves of :func:`_free_samples`' samples, as :func:`_leaf_keys` and :func:`_group`
+    make them from the samples (without holding the samples): each sample's leaf
+    ``floor(x / size)`` found in a hash of the leaves seen so far, its coordinates added to the
+    leaf's sums in sample order (from 0); the centroids (sums / count) in increasing
+    lexicographic leaf order. ``far`` when a leaf index lies outside +-2^20 (centroids unset)."""
+    n = hits.shape[0]
+    kk = np.empty(n, np.int64)      # per ray: its regular samples (as _free_samples)
+    total = 0
+    for i in range(n):
+        L = length[i]
+        k = np.int64(np.ceil(L / fr)) - 1
+        if k < 0:
+            k = 0
+        if k > 0 and k * fr >= L:
+            k -= 1
+        if (k + 1) * fr < L:
+            k += 1
+        kk[i] = k
+        total += 1 + k + (1 if L > fr else 0)
+    hbits = 4
+    while (1 << hbits) < 2 * total:
+        hbits += 1
+    mask = (1 << hbits) - 1
+    hkey = np.full(1 << hbits, -1, np.int64)
+    hid = np.empty(1 << hbits, np.int64)
+    lkey = np.empty(total, np.int64)    # per leaf (in order of first sample): key, sums, count
+    sums = np.empty((total, 3))
+    cnt = np.empty(total, np.int64)
+    m = 0
+    last_key = -1
+    last_id = -1
+    origin_key = -1
+    key = -1
+    for i in range(n):
+        L = length[i]
+        k = kk[i]
+        last = k + (1 if L > fr else 0)
+        ux = uy = uz = 0.0
+        if last > 0:
+            ux = (hits[i, 0] - origin[0]) / L
+            uy = (hits[i, 1] - origin[1]) / L
+            uz = (hits[i, 2] - origin[2]) / L
+        for pos in range(last + 1):
+            if pos == 0:    # each ray's first sample: the origin itself (its leaf known)
+                x, y, z = origin[0], origin[1], origin[2]
+                if origin_key >= 0:
+                    key = origin_key
+            else:
+                dist = pos * fr if pos <= k else L - fr
+                x = origin[0] + ux * dist
+                y = origin[1] + uy * dist
+                z = origin[2] + uz * dist
+            if pos > 0 or origin_key < 0:
+                cx = np.floor(x / size)
+                cy = np.floor(y / size)
+                cz = np.floor(z / size)
+                if (cx < -_OFF or cx >= _OFF or cy < -_OFF or cy >= _OFF or cz < -_OFF
+                        or cz >= _OFF):
+                    return np.zeros((0, 3)), True
+                key = (((np.int64(cx) + _OFF) << 42) | ((np.int64(cy) + _OFF) << 21)
+                       | (np.int64(cz) + _OFF))
+                if pos == 0:
+                    origin_key = key
+            if key != last_key:
+                h = np.int64((np.uint64(key) * np.uint64(0x9E3779B97F4A7C15))
+                             >> np.uint64(64 - hbits))
+                while hkey[h] >= 0 and hkey[h] != key:
+                    h = (h + 1) & mask
+                if hkey[h] < 0:     # a new leaf
+                    lkey[m] = key
+                    sums[m, 0] = 0.0
+                    sums[m, 1] = 0.0
+                    sums[m, 2] = 0.0
+                    cnt[m] = 0
+                    hkey[h] = key
+                    hid[h] = m
+                    m += 1
+                last_id = hid[h]
+                last_key = key
+            sums[last_id, 0] += x
+            sums[last_id, 1] += y
+            sums[last_id, 2] += z
+            cnt[last_id] += 1
+    order = np.argsort(lkey[:m])
+    cen = np.empty((m, 3))
+    for g in range(m):
+        q = order[g]
+        c = np.float64(cnt[q])
+        cen[g, 0] = sums[q, 0] / c
+        cen[g, 1] = sums[q, 1] / c
+        cen[g, 2] = sums[q, 2] / c
+    return cen, False
+
+
+@njit(cache=True, nogil=True)
 def _bases(points, res):  # pragma: no cover - compiled
     """``floor(points / res)`` as int64 and its per-axis minimum and maximum."""
     n = points.shape[0]
@@ -247,12 +343,13 @@ def _scan_evidence(points, labels, base, order, t0, t1, x0, x1, codes, lo, dims,
 
     ``vloc`` .. ``enext`` are scratch arrays kept by the caller (``vloc`` at least 64 per block
     the scan can touch, ``vcnt`` .. ``vcode`` at least one per voxel it can touch, ``acc``
-    ``dense_k`` per voxel); the list arrays ``ecls``, ``evalue``, ``enext`` grow here when full.
+    ``dense_k`` per voxel, the list ``ecls``, ``evalue``, ``enext`` one per pair it can make:
+    nothing grows in the loop).
     Returns ``blk`` (per block of the scan's box of 4^3-voxel blocks: its local block, -1 if not
     touched), ``vloc`` (per local block and voxel in it: the local voxel, -1 if not touched) and
     per local voxel its pair count ``vcnt``, first class ``c0`` and its summed weight ``w0`` and
     the head ``more`` of a list of further (class ``ecls``, sum ``evalue``, next ``enext``), as
-    views of the scratch, then the three list arrays themselves (to keep when they grew).
+    views of the scratch.
     With ``dense_k`` > 0 (few classes), the sums are kept per local voxel and class in ``acc``
     (``dense_k`` per voxel, from 0) instead, and ``c0``, ``w0``, ``more`` and the list are empty."""
     blo0, blo1, blo2 = lo[0] >> 2, lo[1] >> 2, lo[2] >> 2
@@ -265,7 +362,6 @@ def _scan_evidence(points, labels, base, order, t0, t1, x0, x1, codes, lo, dims,
     nb = 0
     nv = 0
     ne = 0
-    ecap = ecls.shape[0]
     cap = 16                           # points of one voxel held at a time (grows)
     sq = np.empty((cap, 3, w))        # per point, axis and offset: the squared distance
     low = np.zeros((3, w))            # per axis and offset: its smallest over the voxel's points
@@ -351,17 +447,6 @@ def _scan_evidence(points, labels, base, order, t0, t1, x0, x1, codes, lo, dims,
                         while e >= 0 and ecls[e] != c:
                             e = enext[e]
                         if e < 0:
-                            if ne == ecap:
-                                ecap *= 2
-                                g = np.empty(ecap, np.int32)
-                                g[:ne] = ecls[:ne]
-                                ecls = g
-                                g = np.empty(ecap, np.int32)
-                                g[:ne] = enext[:ne]
-                                enext = g
-                                f = np.empty(ecap)
-                                f[:ne] = evalue[:ne]
-                                evalue = f
                             e = ne
                             ecls[e] = c
                             evalue[e] = 0.0
@@ -374,7 +459,7 @@ def _scan_evidence(points, labels, base, order, t0, t1, x0, x1, codes, lo, dims,
         rank[vcode[v]] = -1
     nc = 0 if dense_k else nv
     return (blk, vloc[:nb * 64], vcnt[:nv], c0[:nc], w0[:nc], more[:nc], ecls[:ne], evalue[:ne],
-            enext[:ne], acc[:nv * dense_k], ecls, evalue, enext)
+            enext[:ne], acc[:nv * dense_k])
 
 
 @njit(cache=True, nogil=True)
@@ -490,6 +575,15 @@ def free_samples(hits: np.ndarray, origin: np.ndarray, length: np.ndarray, fr: f
                          np.ascontiguousarray(origin, dtype=np.float64), length, float(fr))
 
 
+def free_leaves(hits: np.ndarray, origin: np.ndarray, length: np.ndarray, fr: float,
+                size: float):
+    """``downsample(free_samples(hits, origin, length, fr), None, size)`` without the samples
+    held: ``(centroids, far)``, the same centroids bit for bit (see :func:`_free_leaves`)."""
+    return _free_leaves(np.ascontiguousarray(hits, dtype=np.float64),
+                        np.ascontiguousarray(origin, dtype=np.float64), length, float(fr),
+                        float(size))
+
+
 def bases(points: np.ndarray, resolution: float):
     """``(floor(points / resolution), its minimum, its maximum)`` per axis, int64."""
     _announce()
@@ -579,23 +673,22 @@ dense array (no per-pair search of the class); beyond, the first class of each v
 a list for the others (a voxel rarely sees more than one or two of 20 classes)."""
 
 
-def _scratch(store: list, j: int, n_vox: int, n_blk: int, dense_k: int):
-    """Scratch arrays of job ``j`` for :func:`_scan_evidence` with room for ``n_vox`` voxels and
-    ``n_blk`` blocks, kept in ``store`` from scan to scan (grown by a quarter at least when short;
-    pages never written cost no memory)."""
+def _scratch(store: list, j: int, n_vox: int, n_blk: int, n_pairs: int, dense_k: int):
+    """Scratch arrays of job ``j`` for :func:`_scan_evidence` with room for ``n_vox`` voxels,
+    ``n_blk`` blocks and ``n_pairs`` list entries, kept in ``store`` from scan to scan (grown by a
+    quarter at least when short; pages never written cost no memory)."""
     while len(store) <= j:
         store.append(None)
     have = store[j]
     if (have is None or len(have[1]) < n_vox or len(have[0]) < 64 * n_blk
-            or len(have[6]) < n_vox * dense_k):
-        old = (0, 0) if have is None else (len(have[1]), len(have[0]) // 64)
+            or len(have[6]) < n_vox * dense_k or len(have[7]) < n_pairs):
+        old = (0, 0, 0) if have is None else (len(have[1]), len(have[0]) // 64, len(have[7]))
         nv = max(n_vox, old[0] + old[0] // 4)
         nb = max(n_blk, old[1] + old[1] // 4)
-        lists = have[7:] if have is not None else (np.empty(1024, np.int32), np.empty(1024),
-                                                   np.empty(1024, np.int32))
+        ne = max(n_pairs, old[2] + old[2] // 4)
         have = (np.empty(64 * nb, np.int32), np.empty(nv, np.int64), np.empty(nv, np.int32),
                 np.empty(nv), np.empty(nv, np.int32), np.empty(nv, np.int64),
-                np.empty(nv * dense_k)) + tuple(lists)
+                np.empty(nv * dense_k), np.empty(ne, np.int32), np.empty(ne), np.empty(ne, np.int32))
         store[j] = have
     return have
 
@@ -632,22 +725,18 @@ def scan_evidence(points, labels, base, lo, dims, R: int, resolution: float, ell
     for j, (x0, x1) in enumerate(zip(edges[:-1], edges[1:])):
         t0 = int(np.searchsorted(bx, x0 - R, "left"))   # the points within R voxels of the range
         t1 = int(np.searchsorted(bx, x1 + R - 1, "right"))
-        n_vox = max(1, min((t1 - t0) * w3, n_box))       # voxels the job can touch, at most
+        n_pairs = max(1, (t1 - t0) * w3)                # pairs the job can make, at most
+        n_vox = min(n_pairs, n_box)                       # voxels it can touch
         jobs.append((points, labels, base, order, t0, t1, x0, x1) + const
-                    + _scratch(store, j, n_vox, min(n_vox, n_blk), dense_k))
-
-    def run(j):
-        out = _scan_evidence(*jobs[j])
-        store[j] = store[j][:7] + out[10:]              # the list arrays, grown or not
-        return out[:10]
-
+                    + _scratch(store, j, n_vox, min(n_vox, n_blk), 0 if dense_k else n_pairs,
+                               dense_k))
     if len(jobs) == 1:
-        return [run(0)]
+        return [_scan_evidence(*jobs[0])]
     if _pool is None or _pool._max_workers < len(jobs):
         from concurrent.futures import ThreadPoolExecutor
         _pool = ThreadPoolExecutor(len(jobs))
-    return list(_pool.map(run, range(len(jobs))))
+    return list(_pool.map(lambda a: _scan_evidence(*a), jobs))
 
 
-KERNELS = (_kernel, _pairs, _leaf_keys, _group, _lengths, _free_samples, _bases, _codes, _scan_evidence,
+KERNELS = (_kernel, _pairs, _leaf_keys, _group, _lengths, _free_samples, _free_leaves, _bases, _codes, _scan_evidence,
            _count_new, _apply)

@@ -233,8 +233,7 @@ def _training_compiled(scan: Scan, ds_resolution: float, free_resolution: float,
     _check_free_resolution(free_resolution)
     length = compiled.lengths(hits, origin)
     _check_free_memory(length, free_resolution)
-    free, _, far = compiled.downsample(compiled.free_samples(hits, origin, length, free_resolution),
-                                       None, ds_resolution)
+    free, far = compiled.free_leaves(hits, origin, length, free_resolution, ds_resolution)
     if far:
         raise _far(ds_resolution)
     pts = np.vstack([hits, free])
