@@ -151,6 +151,7 @@ def time_benchmark(dataset: str, repeat: int) -> None:
         same = all(_same(res[m][1], res[k][1]) for k in res if RUNS[k][0] == m)
         print(f"{TITLE[m]}: the same map bit for bit from every engine and thread count above: "
               f"{'yes' if same else 'NO'}")
+    phase_benchmark(cfg, scans, repeat, res)
     one = {m: res[m][0].sum() / len(scans) for m in ("sbki", "scsm")}
     two = {m: res[f"{m} 2 threads"][0].sum() / len(scans) for m in ("sbki", "scsm")}
     if dataset == "semantickitti":
@@ -167,6 +168,88 @@ def time_benchmark(dataset: str, repeat: int) -> None:
               f"({'ok' if total <= 0.030 else 'MISSED'}); on two threads "
               f"{res['sbki 2 threads'][0].sum() * 1e3:.1f} ms")
         octomap_benchmark(cfg, scans, repeat, one["sbki"])
+
+
+def phase_times(cfg, scans, method: str, repeat: int):
+    """The phases of the compiled insertion (one thread) timed one by one on the same scans, as
+    ``training_data`` and ``VoxelMap.update`` run them: best of ``repeat`` runs per phase, summed
+    over the scans [s], the map they build and the (point, voxel) pairs."""
+    from hw4.bki import compiled as C
+    from hw4.bki.voxelmap import _SHIFT, _pack, kernel_reach
+    best = {}
+    for _ in range(repeat):
+        vmap = VoxelMap(cfg.resolution, cfg.num_class, method, cfg.sf2, cfg.ell, cfg.prior,
+                        cfg.var_thresh, threads=1)
+        R = 0 if method == "scsm" else kernel_reach(vmap.resolution, vmap.ell)
+        got = dict.fromkeys(PHASES, 0.0)
+
+        def lap(name, t):
+            now = time.perf_counter()
+            got[name] += now - t
+            return now
+
+        for s in scans:
+            t = time.perf_counter()
+            hits, lab, _ = C.downsample(s.points, s.labels, cfg.ds_resolution, cfg.num_class)
+            t = lap("downsampling", t)
+            length = C.lengths(hits, s.origin)
+            free, _ = C.free_leaves(hits, s.origin, length, cfg.free_resolution, cfg.ds_resolution)
+            t = lap("free samples", t)
+            pts = np.vstack([hits, free])
+            labels = np.concatenate([lab, np.zeros(len(free), np.int64)])
+            base, bmin, bmax = C.bases(pts, vmap.resolution)
+            lo, dims = bmin - R, bmax + R - (bmin - R) + 1
+            codes = C._codes(base, lo, dims)
+            order, _ = C.stable_order(codes, int(np.prod(dims)) - 1)
+            t = lap("voxel order", t)
+            if vmap._rank is None or len(vmap._rank) < int(np.prod(dims)):
+                vmap._rank = np.full(int(np.prod(dims)), -1, np.int32)
+            n_pairs = max(1, len(pts) * (2 * R + 1) ** 3)
+            n_vox = min(n_pairs, int(np.prod(dims)))
+            dense_k = cfg.num_class if cfg.num_class <= C.DENSE_CLASSES else 0
+            scratch = C._scratch(vmap._scratch, 0, n_vox, n_vox, 0 if dense_k else n_pairs,
+                                 dense_k)
+            t = time.perf_counter()
+            part = C._scan_evidence(pts, labels, base, order, 0, len(pts), lo[0], lo[0] + dims[0],
+                                    codes, lo, dims, R, vmap.resolution, vmap.ell ** 2,
+                                    C._PIECES / vmap.ell, vmap.sf2, C._pieces(), method == "scsm",
+                                    dense_k, vmap._rank, *scratch)
+            t = lap("kernel sums", t)
+            blk, vloc = part[0], part[1]
+            blo = lo >> _SHIFT
+            bdims = tuple(int(x) for x in ((lo + dims - 1) >> _SHIFT) - blo + 1)
+            ub = np.flatnonzero(blk >= 0)
+            rows = vmap._rows_for(_pack(np.column_stack(np.unravel_index(ub, bdims)) + blo))
+            t = lap("block rows", t)
+            vmap._reserve(C._count_new(vmap.table, rows, blk[ub], vloc))
+            t = lap("pool growth", t)
+            vmap.n_voxels = C._apply(vmap.table, rows, blk[ub], *part[1:], vmap.ev, vmap.count,
+                                     vmap.n_voxels)
+            lap("sums added", t)
+            vmap.n_scans += 1
+        best = {k: min(best.get(k, np.inf), v) for k, v in got.items()}
+    return best, vmap
+
+
+PHASES = ("downsampling", "free samples", "voxel order", "kernel sums", "block rows",
+          "pool growth", "sums added")
+
+
+def phase_benchmark(cfg, scans, repeat: int, res) -> None:
+    """Print where a scan's time goes, phase by phase (compiled engine, one thread)."""
+    for method in ("sbki", "scsm"):
+        best, vmap = phase_times(cfg, scans, method, repeat)
+        same = _same(vmap, res[method][1])
+        n = len(scans)
+        pairs = int(vmap.count.sum())
+        whole = res[method][0].sum()
+        print(f"where the time goes, {TITLE[method]} (compiled, one thread, each phase timed "
+              f"alone, best of {repeat}), ms per scan: "
+              + ", ".join(f"{k} {v / n * 1e3:.1f}" for k, v in best.items())
+              + f"; kernel sums {best['kernel sums'] / pairs * 1e9:.1f} ns per pair "
+              f"(floor {FLOOR_NS_PER_PAIR:g}); phases sum {sum(best.values()) / n * 1e3:.1f} ms, "
+              f"the whole insertion above {whole / n * 1e3:.1f} ms; the same map: "
+              f"{'yes' if same else 'NO'}")
 
 
 def octomap_benchmark(cfg, scans, repeat: int, ours_per_scan: float) -> None:
