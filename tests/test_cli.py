@@ -163,3 +163,13 @@ def test_cli_imports_matplotlib_without_docstrings_only_when_it_is_not_loaded():
     r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=ROOT,
                        env={"MPLBACKEND": "Agg", "PATH": "/usr/bin:/bin", "PYTHONPATH": str(ROOT)})
     assert r.returncode == 0 and r.stdout.split() == ["True"], r.stderr
+
+
+def test_figure_import_leaves_the_garbage_collector_as_it_found_it():
+    code = ("import gc, sys\nfrom hw4 import cli\nif sys.argv[1] == 'off':\n    gc.disable()\n"
+            "cli._plotting()\nprint(gc.isenabled())")
+    for state, want in (("on", "True"), ("off", "False")):
+        r = subprocess.run([sys.executable, "-c", code, state], capture_output=True, text=True,
+                           cwd=ROOT, env={"MPLBACKEND": "Agg", "PATH": "/usr/bin:/bin",
+                                          "PYTHONPATH": str(ROOT)})
+        assert r.returncode == 0 and r.stdout.split() == [want], r.stderr

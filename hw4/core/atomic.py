@@ -21,7 +21,6 @@ from __future__ import annotations
 
 import errno
 import os
-import secrets
 from pathlib import Path
 
 from .errors import InputError
@@ -77,7 +76,7 @@ def remove_empty(folders) -> None:
 
 def _mkstemp(folder: Path, stem: str, suffix: str):
     for _ in range(100):
-        path = folder / f"{stem}.partial-{secrets.token_hex(3)}{suffix}"
+        path = folder / f"{stem}.partial-{os.urandom(3).hex()}{suffix}"  # (secrets: slow import)
         try:
             return os.open(path, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o644), path
         except FileExistsError:
