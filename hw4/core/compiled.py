@@ -162,6 +162,60 @@ def _atan2_fast(y, x):  # pragma: no cover - compiled
     return v
 
 
+@njit(cache=True, nogil=True, inline="always", error_model="numpy")
+def _atan2_simd(y, x):  # pragma: no cover - compiled
+    """:func:`_atan2_fast` without branches, for loops the compiler vectorises: the same
+    reduction and series (its polynomial in u^2 by Estrin's scheme, so the last bits differ),
+    arctan2(y, x) [rad] within 1e-10. Callers compile with ``error_model='numpy'`` (no
+    division check: x = y = 0 gives 0/0, replaced by 0 as in :func:`_atan2_fast`)."""
+    ax = abs(x)
+    ay = abs(y)
+    swap = ay > ax
+    num = min(ax, ay)
+    den = max(ax, ay)
+    a = num / den
+    a = a if den > 0.0 else 0.0
+    big = a > TAN_PI_8
+    a = (a - 1.0) / (a + 1.0) if big else a
+    base = PI / 4 if big else 0.0
+    u2 = a * a
+    u4 = u2 * u2
+    u8 = u4 * u4
+    q0 = (-1.0 / 3.0) + u2 * (1.0 / 5.0)  # the series' coefficients (-1)^(i+1) / (2 i + 3)
+    q1 = (-1.0 / 7.0) + u2 * (1.0 / 9.0)
+    q2 = (-1.0 / 11.0) + u2 * (1.0 / 13.0)
+    q3 = (-1.0 / 15.0) + u2 * (1.0 / 17.0)
+    q4 = (-1.0 / 19.0) + u2 * (1.0 / 21.0)
+    p = (q0 + u4 * q1) + u8 * ((q2 + u4 * q3) + u8 * q4)
+    v = base + (a + a * u2 * p)
+    v = PI / 2 - v if swap else v
+    v = PI - v if math.copysign(1.0, x) < 0.0 else v
+    v = -v if math.copysign(1.0, y) < 0.0 else v
+    return v
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def _bearings_simd(ent, e0, e1, cells, px, py, h, dx_s, dy_s, r_s,
+                   pa_s):  # pragma: no cover - compiled
+    """For the cells ``ent[e0:e1]`` seen from (px, py, h) [m, m, rad], |h| <= pi: offsets
+    ``dx_s``, ``dy_s`` and ranges ``r_s`` [m] (as the kernels compute them) and bearings
+    ``pa_s`` [rad] within 1e-10 of the exact wrapped bearing. The cells are gathered first, so
+    that the second loop, without branches, is vectorised by the compiler. With |h| <= pi,
+    atan2 - h lies in [-2 pi, 2 pi], where ``_wrap`` is the two shifts below."""
+    m = e1 - e0
+    for i in range(m):
+        ci = ent[e0 + i]
+        dx_s[i] = cells[ci, 0] - px
+        dy_s[i] = cells[ci, 1] - py
+    for i in range(m):
+        dx = dx_s[i]
+        dy = dy_s[i]
+        r_s[i] = math.sqrt(dx ** 2 + dy ** 2)
+        a = _atan2_simd(dy, dx) - h
+        w = a + TWO_PI if a < 0.0 else a
+        pa_s[i] = w - TWO_PI if w > PI else w
+
+
 @njit(cache=True, nogil=True, inline="always")
 def _nearest_at(pos, start, n, phi, srt, sbearing):  # pragma: no cover - compiled
     """The tail of :func:`_nearest_fast`: given ``pos``, the number of the pose's sorted
@@ -584,14 +638,15 @@ PASS_PAIRS = 1 << 20  # (cell, pose) pairs per block of the pose-by-pose pass (b
 @njit(cache=True, nogil=True)
 def _pose_pass(c0, c1, cells, poses, nn, ranges, cls_hit, srt, key, seg_start, seg_len, bin_lo,
                dense, sbearing, bin_scale, bins, continuous, z_max, half, wb2, bmin, bmax, l,
-               acc, kk, ent, pairs):  # pragma: no cover - compiled
+               acc, kk, ent, ent_q, pairs):  # pragma: no cover - compiled
     """The nearest beams of the (cell, pose) pairs of cells c0:c1 (poses ``nn``), pose by pose.
 
     Each pair takes the steps of :func:`_cells_kernel`. Discrete models add their counts to
     ``acc`` at once (whole numbers: any order gives the same sums). Continuous models write
     ``kk[(ci - c0) * k + q]``: the sorted position of the nearest beam of pair (ci, nn[ci, q])
     when that beam can come within l of the cell, else -1 (their sums are formed cell by cell
-    by :func:`_kernel_pass`). ``ent`` (at least (c1 - c0) k int32) is scratch.
+    by :func:`_kernel_pass`). ``ent`` and, continuous, ``ent_q`` (at least (c1 - c0) k int32
+    each) are scratch: the pairs' cells and slots q, pose by pose.
 
     A pose meets its cells in ascending order, so one pose's bearing index stays in the cache,
     and along a row of cells the count of the pose's bearings below the cell's bearing (from
@@ -612,11 +667,20 @@ def _pose_pass(c0, c1, cells, poses, nn, ranges, cls_hit, srt, key, seg_start, s
     for ci in range(c0, c1):
         for q in range(n_per):
             t = nn[ci, q]
-            ent[fill[t]] = (ci - c0) * n_per + q
+            ent[fill[t]] = ci
+            if continuous:
+                ent_q[fill[t]] = q
             fill[t] += 1
     if continuous:
         for e in range((c1 - c0) * n_per):
             kk[e] = -1
+    most = 0
+    for t in range(n_poses):
+        most = max(most, start[t + 1] - start[t])
+    r_s = np.empty(most)
+    pa_s = np.empty(most)
+    dx_s = np.empty(most)
+    dy_s = np.empty(most)
     n_pairs = 0
     n_fast = 0
     k = 0
@@ -637,21 +701,27 @@ def _pose_pass(c0, c1, cells, poses, nn, ranges, cls_hit, srt, key, seg_start, s
         n = seg_len[t]
         ppos = 0
         pci = -2
-        for e in range(start[t], start[t + 1]):
-            slot = ent[e]
-            ci = c0 + slot // n_per
-            cx = cells[ci, 0]
-            cy = cells[ci, 1]
-            dx = cx - px
-            dy = cy - py
-            r = math.sqrt(dx ** 2 + dy ** 2)
+        e0 = start[t]
+        simd = abs(h) <= PI and not dn
+        if simd:  # ranges and fast bearings of all the pose's cells in one vectorised loop
+            _bearings_simd(ent, e0, start[t + 1], cells, px, py, h, dx_s, dy_s, r_s, pa_s)
+        for e in range(e0, start[t + 1]):
+            ci = ent[e]
+            if simd:
+                dx = dx_s[e - e0]
+                dy = dy_s[e - e0]
+                r = r_s[e - e0]
+            else:
+                dx = cells[ci, 0] - px
+                dy = cells[ci, 1] - py
+                r = math.sqrt(dx ** 2 + dy ** 2)
             if not (r > 0.0 and r < z_max):
                 continue
             # as in _cells_kernel: a fast arctangent within EPS decides, and any decision
             # closer than EPS to its threshold is taken again with the exact bearing
             sure = False
             if not dn:
-                pa = _wrap(_atan2_fast(dy, dx) - h)
+                pa = pa_s[e - e0] if simd else _wrap(_atan2_fast(dy, dx) - h)
                 if abs(pa) < PI - EPS:
                     if ci == pci + 1:  # the next cell of a row: step from its count
                         pos = ppos
@@ -671,29 +741,29 @@ def _pose_pass(c0, c1, cells, poses, nn, ranges, cls_hit, srt, key, seg_start, s
                     ppos = pos
                     pci = ci
                     k, diff, sure = _nearest_at(pos, st, n, pa, srt, sbearing)
-                if sure:
-                    if not continuous:
-                        lo_ = lo_t - 1e-9
-                        hi_ = hi_t + 1e-9
-                        if not wraps and (abs(pa - lo_) < EPS or abs(pa - hi_) < EPS):
+            if sure:
+                if not continuous:
+                    lo_ = lo_t - 1e-9
+                    hi_ = hi_t + 1e-9
+                    if not wraps and (abs(pa - lo_) < EPS or abs(pa - hi_) < EPS):
+                        sure = False
+                    reach_ok = wraps or (pa >= lo_ and pa <= hi_)
+                    if abs(diff - wb2) < EPS:
+                        sure = False
+                    wide = diff > wb2
+                else:
+                    zk = ranges[k]
+                    if r - zk >= lim:
+                        near = False
+                    elif abs(diff - PI / 2) < EPS:
+                        sure = False
+                    elif diff < PI / 2:
+                        g_ = r * math.sin(diff)
+                        if abs(g_ - lim) <= r * EPS + 1e-12:
                             sure = False
-                        reach_ok = wraps or (pa >= lo_ and pa <= hi_)
-                        if abs(diff - wb2) < EPS:
-                            sure = False
-                        wide = diff > wb2
+                        near = g_ < lim
                     else:
-                        zk = ranges[k]
-                        if r - zk >= lim:
-                            near = False
-                        elif abs(diff - PI / 2) < EPS:
-                            sure = False
-                        elif diff < PI / 2:
-                            g_ = r * math.sin(diff)
-                            if abs(g_ - lim) <= r * EPS + 1e-12:
-                                sure = False
-                            near = g_ < lim
-                        else:
-                            near = r < lim
+                        near = r < lim
             if not sure:
                 phi = _wrap(math.atan2(dy, dx) - h)
                 if not (phi > -PI and phi < PI):
@@ -724,7 +794,7 @@ def _pose_pass(c0, c1, cells, poses, nn, ranges, cls_hit, srt, key, seg_start, s
                     acc[ci, free] += 1.0
                 continue
             if near:
-                kk[slot] = k
+                kk[(ci - c0) * n_per + ent_q[e]] = k
     pairs[0] += n_pairs
     pairs[2] += n_fast
 
@@ -811,9 +881,10 @@ def _nn_pass(c0, c1, args, kargs, nn, continuous, acc, pairs):
     size = min(per, c1 - c0) * nn.shape[1]
     ent = np.empty(size, np.int32)
     kk = np.empty(size if continuous else 1, np.int32)
+    ent_q = np.empty(size if continuous else 1, np.int32)
     for a in range(c0, c1, per):
         b = min(a + per, c1)
-        _pose_pass(a, b, *args, acc, kk, ent, pairs)
+        _pose_pass(a, b, *args, acc, kk, ent, ent_q, pairs)
         if continuous:
             _kernel_pass(a, b, *kargs[:3], kk, *kargs[3:], acc, pairs)
 
