@@ -99,7 +99,7 @@ def main(argv=None) -> int:
             line = []
             for v, ts in times.items():
                 line.append(f"{v} best {min(ts):.2f} s, median {statistics.median(ts):.2f} s "
-                            f"(CPU best {min(cpu[v]):.2f} s)")
+                            f"(CPU best {min(cpu[v]):.2f}, median {statistics.median(cpu[v]):.2f} s)")
             ratio = (f"; new/old best {min(times['new']) / min(times['old']):.2f}, median "
                      f"{statistics.median(times['new']) / statistics.median(times['old']):.2f}"
                      if args.against else "")
