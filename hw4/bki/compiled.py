@@ -10,9 +10,12 @@ same bit for bit (the tests compare the two engines):
   then per leaf the sum of its points in input order divided by their number (what ``bincount``
   does) and the majority label, ties to the smallest.
 * **Free samples** (:func:`free_samples`): per ray the numpy formulas, element by element
-  (``origin + (diff / L) * dist``, ``L = sqrt((dx^2 + dy^2) + dz^2)`` as ``np.linalg.norm``).
+  (``origin + (diff / L) * dist``, ``L = sqrt((dx^2 + dy^2) + dz^2)`` as ``np.linalg.norm``);
+  :func:`free_leaves` downsamples them as they are made (a hash of leaves, sums in sample
+  order), the same centroids without holding the samples.
 * **Evidence of a scan** (:func:`scan_evidence`): the training points in raveled voxel order
-  (stable), per point the voxel offsets in lexicographic order, each pair's kernel weight from the
+  (stable), taken voxel by voxel (per voxel of points and offset, the points in order: the same
+  order per target voxel as point by point), each pair's kernel weight from the
   table of :func:`hw4.core.kernel.sparse_kernel_pieces` (as :mod:`hw4.bki.kernel_sums`); per
   (voxel, class) the weights are summed from 0 in that order into a sparse per-scan structure,
   which ``_apply`` then adds to the map's evidence. Adding a scan's sum first and the map's value
