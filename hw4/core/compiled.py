@@ -216,6 +216,19 @@ def _bearings_simd(ent, e0, e1, cells, px, py, h, dx_s, dy_s, r_s,
         pa_s[i] = w - TWO_PI if w > PI else w
 
 
+@njit(cache=True, nogil=True, error_model="numpy")
+def _row_simd(gx, i0, i1, cy, px, py, h, r_s, pa_s):  # pragma: no cover - compiled
+    """:func:`_bearings_simd` for the cells ``gx[i0:i1]`` of one row (centre y ``cy``) [m]:
+    ranges ``r_s`` [m] and fast bearings ``pa_s`` [rad] from (px, py, h), |h| <= pi."""
+    dy = cy - py
+    for i in range(i1 - i0):
+        dx = gx[i0 + i] - px
+        r_s[i] = math.sqrt(dx ** 2 + dy ** 2)
+        a = _atan2_simd(dy, dx) - h
+        w = a + TWO_PI if a < 0.0 else a
+        pa_s[i] = w - TWO_PI if w > PI else w
+
+
 @njit(cache=True, nogil=True, inline="always")
 def _nearest_at(pos, start, n, phi, srt, sbearing):  # pragma: no cover - compiled
     """The tail of :func:`_nearest_fast`: given ``pos``, the number of the pose's sorted
@@ -914,16 +927,21 @@ def _poses_kernel(row0, row1, gx, gy, poses, reach, ranges, cls_hit, srt, key,
     near = False
     wide = False
     reach_ok = False
+    r_s = np.empty(nx)
+    pa_s = np.empty(nx)
     for t in range(poses.shape[0]):
         px = poses[t, 0]
         py = poses[t, 1]
         rt = reach[t]
+        simd = abs(poses[t, 2]) <= PI and not dense[t]
         ix0 = max(0, int(math.floor((px - rt - gx[0]) / g)) - 1)
         ix1 = min(nx - 1, int(math.ceil((px + rt - gx[0]) / g)) + 1)
         iy0 = max(row0, int(math.floor((py - rt - gy[0]) / gyy)) - 1)
         iy1 = min(row1 - 1, int(math.ceil((py + rt - gy[0]) / gyy)) + 1)
         for iy in range(iy0, iy1 + 1):
             cy = gy[iy]
+            if simd:  # the row's ranges and fast bearings in one vectorised loop
+                _row_simd(gx, ix0, ix1 + 1, cy, px, py, poses[t, 2], r_s, pa_s)
             for ix in range(ix0, ix1 + 1):
                 cx = gx[ix]
                 if not ((cx - px) ** 2 + (cy - py) ** 2 < rt ** 2):
@@ -931,7 +949,7 @@ def _poses_kernel(row0, row1, gx, gy, poses, reach, ranges, cls_hit, srt, key,
                 ci = iy * nx + ix
                 dx = cx - px
                 dy = cy - py
-                r = math.sqrt(dx ** 2 + dy ** 2)
+                r = r_s[ix - ix0] if simd else math.sqrt(dx ** 2 + dy ** 2)
                 if not (r > 0.0 and r < z_max):
                     continue
                 # The bearing's decisions (field, nearest beam, beam width or gap) from a fast
@@ -939,7 +957,7 @@ def _poses_kernel(row0, row1, gx, gy, poses, reach, ranges, cls_hit, srt, key,
                 # again with the exact bearing, so the outcome is the exact one.
                 sure = False
                 if not dense[t]:
-                    pa = _wrap(_atan2_fast(dy, dx) - poses[t, 2])
+                    pa = pa_s[ix - ix0] if simd else _wrap(_atan2_fast(dy, dx) - poses[t, 2])
                     if abs(pa) < PI - EPS:
                         k, diff, sure = _nearest_fast(t, pa, srt, seg_start, seg_len,
                                                       bin_lo, sbearing, bin_scale, bins)
