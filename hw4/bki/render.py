@@ -733,7 +733,7 @@ def mapping_video(view_groups, cam: Camera, titles, gif=None, mp4=None, strip=No
     for i, views in enumerate(view_groups):
         keep = strip is not None and (strip_scans is None or i + 1 in strip_scans)
         kept.append(views if keep else None)
-        fig = plot_maps({f"{t}, scan {i + 1}": v for t, v in zip(titles, views)}, cam, width=width,
+        fig = plot_maps({f"{t}, {scans_done(i + 1)}": v for t, v in zip(titles, views)}, cam, width=width,
                         trajectory=None if trajectory is None else np.asarray(trajectory)[:i + 1])
         fig.set_dpi(dpi)
         frames.append(figure_to_array(fig))
@@ -806,10 +806,16 @@ def plot_strip(view_groups, scans, cam: Camera, titles, trajectory=None, width: 
         if row == 0:
             ax.set_title(titles[col], fontsize=9.5, pad=2)
         if col == 0:
-            ax.text(-0.02, 0.5, f"scan {scans[row]}", transform=ax.transAxes, rotation=90,
+            ax.text(-0.02, 0.5, scans_done(scans[row]), transform=ax.transAxes, rotation=90,
                     ha="right", va="center", fontsize=9)
     _class_legend(fig, last, loc="lower center", cam=cam, trajectory=trajectory is not None)
     return fig
+
+
+def scans_done(n: int) -> str:
+    """Label of a map after its first ``n`` scans: 'after 1 scan', 'after 5 scans' (a count, so
+    that it never reads as a scan's index, which the book counts from 0)."""
+    return f"after {n} scan" + ("" if n == 1 else "s")
 
 
 def save_png(fig, path, dpi: int = 200) -> None:
