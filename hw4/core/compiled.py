@@ -291,6 +291,28 @@ def _insert(d, t, bd, bi, have, m):  # pragma: no cover - compiled
     return have
 
 
+RANK_MAX = 96  # candidates up to which a cell's k + 1 nearest are placed by their ranks
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _rank_select(bufd, bufi, nb, bd, bi, m):  # pragma: no cover - compiled
+    """The first m of the nb (squared distance, pose) pairs ``bufd``, ``bufi`` (distinct poses,
+    nb >= m) in the order (distance, then pose) into ``bd``, ``bi``: each pair goes to its rank,
+    the number of pairs before it in that order (a loop without branches, vectorised; the
+    insertion sort's mispredicted branches cost more at these sizes). The same arrays as
+    inserting them one by one with :func:`_insert`."""
+    for a in range(nb):
+        da = bufd[a]
+        ta = bufi[a]
+        rk = 0
+        for b in range(nb):
+            db = bufd[b]
+            rk += (db < da) | ((db == da) & (bufi[b] < ta))
+        if rk < m:
+            bd[rk] = da
+            bi[rk] = ta
+
+
 @njit(cache=True, nogil=True)
 def _bin_table(sbearing, seg_start, seg_len, bins, lo, dense):  # pragma: no cover - compiled
     scale = bins / TWO_PI
@@ -442,9 +464,12 @@ def _knn_tiles(cells, pxy, k, tile, out, tie):  # pragma: no cover - compiled
                     bufd[nb] = d
                     bufi[nb] = t
                     nb += 1
-            have = 0
-            for j in range(nb):
-                have = _insert(bufd[j], bufi[j], bd, bi, have, m)
+            if nb <= RANK_MAX:
+                _rank_select(bufd, bufi, nb, bd, bi, m)
+            else:
+                have = 0
+                for j in range(nb):
+                    have = _insert(bufd[j], bufi[j], bd, bi, have, m)
             t_ = False
             for j in range(k):
                 out[i, j] = bi[j]
