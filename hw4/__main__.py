@@ -54,4 +54,8 @@ def main(argv=None) -> int:
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    from . import cli
+    cli.OWN_PROCESS = True
+    status = main()
+    cli.freeze_gc()  # the interpreter's last full collection at exit then skips what exit frees
+    sys.exit(status)

@@ -173,3 +173,23 @@ def test_figure_import_leaves_the_garbage_collector_as_it_found_it():
                            cwd=ROOT, env={"MPLBACKEND": "Agg", "PATH": "/usr/bin:/bin",
                                           "PYTHONPATH": str(ROOT)})
         assert r.returncode == 0 and r.stdout.split() == [want], r.stderr
+
+
+def test_objects_are_frozen_only_in_a_process_of_its_own(tmp_path):
+    """``python -m hw4`` freezes the long-lived objects out of the garbage collector's reach
+    (hw4.cli.freeze_gc); main() called from Python leaves the collector as it was."""
+    import gc
+    from hw4.__main__ import main
+    before = gc.get_freeze_count()
+    assert main(["run", "--task", "1", "--grid-size", "0.5", "--out", str(tmp_path / "a")]) == 0
+    assert gc.get_freeze_count() == before
+    code = ("import gc, runpy, sys\nsys.argv = ['hw4'] + sys.argv[1:]\ntry:\n"
+            "    runpy.run_module('hw4', run_name='__main__')\nexcept SystemExit as e:\n"
+            "    assert not e.code, e.code\nprint(gc.get_freeze_count(), gc.isenabled())")
+    r = subprocess.run([sys.executable, "-c", code, "run", "--task", "1", "--grid-size", "0.5",
+                        "--out", str(tmp_path / "b")], capture_output=True, text=True, cwd=ROOT,
+                       env={"MPLBACKEND": "Agg", "PATH": "/usr/bin:/bin", "PYTHONPATH": str(ROOT)})
+    assert r.returncode == 0, r.stderr
+    frozen, enabled = r.stdout.split()[-2:]
+    assert int(frozen) > 50_000 and enabled == "True"
+    assert _files(tmp_path / "a") == _files(tmp_path / "b")  # the same files either way
