@@ -967,6 +967,10 @@ def _poses_kernel(row0, row1, gx, gy, poses, reach, ranges, cls_hit, srt, key,
             cy = gy[iy]
             if simd:  # the row's ranges and fast bearings in one vectorised loop
                 _row_simd(gx, ix0, ix1 + 1, cy, px, py, poses[t, 2], r_s, pa_s)
+            pix = -2
+            ppos = 0
+            st = seg_start[t]
+            n = seg_len[t]
             for ix in range(ix0, ix1 + 1):
                 cx = gx[ix]
                 if not ((cx - px) ** 2 + (cy - py) ** 2 < rt ** 2):
@@ -984,8 +988,24 @@ def _poses_kernel(row0, row1, gx, gy, poses, reach, ranges, cls_hit, srt, key,
                 if not dense[t]:
                     pa = pa_s[ix - ix0] if simd else _wrap(_atan2_fast(dy, dx) - poses[t, 2])
                     if abs(pa) < PI - EPS:
-                        k, diff, sure = _nearest_fast(t, pa, srt, seg_start, seg_len,
-                                                      bin_lo, sbearing, bin_scale, bins)
+                        if ix == pix + 1:  # the next cell of the row: step from its count
+                            pos = ppos
+                            while pos > 0 and sbearing[st + pos - 1] >= pa:
+                                pos -= 1
+                            while pos < n and sbearing[st + pos] < pa:
+                                pos += 1
+                        else:  # the bin table
+                            b = math.floor((pa + PI) * bin_scale)
+                            ib = int(b) if b > 0 else 0
+                            if ib > bins - 1:
+                                ib = bins - 1
+                            pos = bin_lo[t, ib]
+                            nxt = pos if pos < n - 1 else n - 1
+                            if pos < n and sbearing[st + nxt] < pa:
+                                pos += 1
+                        ppos = pos
+                        pix = ix
+                        k, diff, sure = _nearest_at(pos, st, n, pa, srt, sbearing)
                     if sure:
                         if not continuous:
                             lo_ = bmin[t] - wb2 - 1e-9
