@@ -439,7 +439,8 @@ def test_lost_walls_one_account_little_evidence_less_alpha_than_beta():
     assert (a[seen] <= b[seen]).all()                       # "less alpha than beta"
     n, n_seen = len(lab), int(seen.sum())
     assert f"its {n} cells hold little of either" in text2
-    assert f"{n - n_seen} hold no evidence at all, and the other {n_seen}" in text2
+    assert (f"{n - n_seen} hold no evidence at all, and the other {n_seen} less $\\alpha$ than "
+            "$\\beta$") in text2
     a, b, var = a[seen], b[seen], var[seen]
     mean = a / (a + b)
     assert (f"median $\\alpha = {np.median(a):.2f}$ against $\\beta = {np.median(b):.2f}$, with "
