@@ -7,15 +7,20 @@ the same pairs, the same nearest beam and the same sums:
 
 * :func:`nearest_poses` is the exact k-nearest-pose query (squared distances ``dx dx + dy dy``
   as scipy's KD-tree computes them, sorted by distance) over tiles of cells sharing one sorted
-  candidate list; cells whose ranking has a tie (two poses at the same distance) are flagged and
-  answered by scipy's KD-tree itself, so the poses and their order are always the KD-tree's.
+  candidate list, each cell's k + 1 nearest placed by their ranks among its candidates
+  (:func:`_rank_select`, a vectorised count); cells whose ranking has a tie (two poses at the
+  same distance) are flagged and answered by scipy's KD-tree itself, so the poses and their
+  order are always the KD-tree's.
 * :func:`bin_table` builds the per-pose bin table of :class:`hw4.core.sensor.BeamTable` in one
   pass (the same arrays as its numpy form).
-* :func:`cell_evidence` visits, cell by cell, its poses in the KD-tree's order: range, wrapped
-  bearing (``np.remainder`` as numpy computes it), the perceptual field, the nearest beam from
-  the same sorted bearing index (:class:`hw4.core.sensor.BeamTable`; the beams' ranges, classes
-  and directions are read in that index's order, at the beam's sorted position), then
-  Algorithm 1 or 2.
+* :func:`cell_evidence` evaluates, per (cell, pose) pair: range, wrapped bearing (``np.remainder``
+  as numpy computes it), the perceptual field, the nearest beam from the same sorted bearing
+  index (:class:`hw4.core.sensor.BeamTable`; the beams' ranges, classes and directions are read
+  in that index's order, at the beam's sorted position), then Algorithm 1 or 2. With the
+  nearest poses it visits the pairs pose by pose (:func:`_pose_pass`: one pose's bearing index
+  stays in the cache, and its cells' ranges and fast bearings come from one vectorised loop,
+  :func:`_bearings_simd`); the discrete counts are whole numbers, so their order does not
+  matter, and the continuous sums are then formed cell by cell (:func:`_kernel_pass`).
   Sums per cell are formed in the numpy path's order (end points per class over the cell's
   poses, then the free samples offset by offset), so the map does not depend on how cells are
   split among threads.
