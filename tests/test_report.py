@@ -438,16 +438,17 @@ def test_lost_walls_one_account_little_evidence_less_alpha_than_beta():
     assert (lab[seen] == free).all()                        # all free or without evidence
     assert (a[seen] <= b[seen]).all()                       # "less alpha than beta"
     n, n_seen = len(lab), int(seen.sum())
-    assert f"its {n} cells hold little of either" in text2
+    assert f"The 0.27 m map loses walls in {n} of its cells, and these hold little evidence" in text2
     assert (f"{n - n_seen} hold no evidence at all, and the other {n_seen} less $\\alpha$ than "
             "$\\beta$") in text2
     a, b, var = a[seen], b[seen], var[seen]
     mean = a / (a + b)
     assert (f"median $\\alpha = {np.median(a):.2f}$ against $\\beta = {np.median(b):.2f}$, with "
             f"$\\alpha + \\beta$ below 1 in {100 * np.mean(a + b < 1):.0f} % of them") in text2
-    assert f"(mean: median {np.median(mean):.2f})" in text2
+    assert f"(their median occupancy mean is {np.median(mean):.2f})" in text2
     assert np.median(mean) < 0.5 and np.mean(a + b < 1) > 0.5          # "mostly" under one count
     assert f"(median {np.median(var):.2f} at 0.27 m, against {var_free:.3f} on average" in text2
+    assert f"run on along most of the walls the occupancy map has lost (the {n_seen} of their cells that hold evidence)" in text2
     assert np.median(var) > 5 * var_free
     assert "almost no end-point weight" not in text2      # the account v14's reader refuted
     assert "\\alpha \\approx \\beta$ there" not in text2
