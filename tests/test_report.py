@@ -459,7 +459,7 @@ def test_lost_walls_one_account_little_evidence_less_alpha_than_beta():
     assert (alpha[seen][:, :-1].max(axis=1) <= alpha[seen][:, -1]).all()   # above any one label
     assert f"mostly ({100 * np.mean(a[seen] < b[seen]):.0f} %) above all their labelled weight" in text4
     a, b, var = a[seen], b[seen], var[seen]
-    assert (f"a median of {np.median(a):.2f} against {np.median(b):.2f}, the sum below 1 in "
+    assert (f"a median labelled weight of {np.median(a):.2f} against a free weight of {np.median(b):.2f}, the sum below 1 in "
             f"{100 * np.mean(a + b < 1):.0f} % of them") in text4
     assert f"(median variance {np.median(var):.2f}, against {var_free:.3f} in free cells)" in text4
 
