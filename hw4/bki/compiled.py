@@ -5,10 +5,11 @@
 module repeats every arithmetic step of it in loops, so the training points and the map are the
 same bit for bit (the tests compare the two engines):
 
-* **Downsampling** (:func:`downsample`): the leaf ``floor(x / size)`` of every point, a stable
-  sort of the leaves (keys relative to the scan's box of leaves, lexicographic in x, y, z),
-  then per leaf the sum of its points in input order divided by their number (what ``bincount``
-  does) and the majority label, ties to the smallest.
+* **Downsampling** (:func:`downsample`): the leaf ``floor(x / size)`` of every point (keys
+  relative to the scan's box of leaves, lexicographic in x, y, z), one ``np.sort`` of the values
+  ``key << nb | index`` (the stable order of the leaves), each point's leaf scattered back to
+  its position, then the points streamed in input order into their leaf's sums (from 0: what
+  ``bincount`` adds), divided by their number, and the majority label, ties to the smallest.
 * **Free samples** (:func:`free_samples`): per ray the numpy formulas, element by element
   (``origin + (diff / L) * dist``, ``L = sqrt((dx^2 + dy^2) + dz^2)`` as ``np.linalg.norm``);
   :func:`free_leaves` downsamples them as they are made (a hash of leaves, sums in sample
@@ -47,84 +48,111 @@ _OFF = 1 << 20   # leaf / block index offset of the packed keys (as training.py,
 def _leaf_keys(points, size):  # pragma: no cover - compiled
     """Per point a key of its leaf ``floor(x / size)``, lexicographic in (x, y, z) (relative to the
     scan's box of leaves, or the packed key of training.py when that box is too large), and the
-    largest key possible. ``far`` when a leaf index lies outside +-2^20 (keys then unset)."""
+    largest key possible. ``far`` when a leaf index lies outside +-2^20 (keys then unset). The
+    packed keys first (and the box), then, in place, the keys relative to the box."""
     n = points.shape[0]
-    cells = np.empty((n, 3), np.int64)
-    lo = np.full(3, np.iinfo(np.int64).max)
-    hi = np.full(3, np.iinfo(np.int64).min)
     keys = np.empty(n, np.int64)
+    lo0 = lo1 = lo2 = np.int64(1) << 62
+    hi0 = hi1 = hi2 = np.int64(-1)
     for i in range(n):
-        for a in range(3):
-            c = np.floor(points[i, a] / size)
-            if c < -_OFF or c >= _OFF:
-                return keys, 0, True
-            v = np.int64(c)
-            cells[i, a] = v
-            if v < lo[a]:
-                lo[a] = v
-            if v > hi[a]:
-                hi[a] = v
+        c0 = np.floor(points[i, 0] / size)
+        c1 = np.floor(points[i, 1] / size)
+        c2 = np.floor(points[i, 2] / size)
+        if (c0 < -_OFF or c0 >= _OFF or c1 < -_OFF or c1 >= _OFF or c2 < -_OFF
+                or c2 >= _OFF):
+            return keys, 0, True
+        u0 = np.int64(c0) + _OFF
+        u1 = np.int64(c1) + _OFF
+        u2 = np.int64(c2) + _OFF
+        keys[i] = (u0 << 42) | (u1 << 21) | u2
+        lo0 = min(lo0, u0)
+        hi0 = max(hi0, u0)
+        lo1 = min(lo1, u1)
+        hi1 = max(hi1, u1)
+        lo2 = min(lo2, u2)
+        hi2 = max(hi2, u2)
     if n == 0:
         return keys, 0, False
-    ny = hi[1] - lo[1] + 1
-    nz = hi[2] - lo[2] + 1
-    if float(hi[0] - lo[0] + 1) * ny * nz < 2.0 ** 62:
-        for i in range(n):
-            keys[i] = ((cells[i, 0] - lo[0]) * ny + (cells[i, 1] - lo[1])) * nz + (cells[i, 2] - lo[2])
-        return keys, (hi[0] - lo[0] + 1) * ny * nz - 1, False
+    ny = hi1 - lo1 + 1
+    nz = hi2 - lo2 + 1
+    nx = hi0 - lo0 + 1
+    if float(nx) * ny * nz >= 2.0 ** 62:
+        return keys, (1 << 63) - 1, False
+    m21 = (np.int64(1) << 21) - 1
     for i in range(n):
-        keys[i] = ((cells[i, 0] + _OFF) << 42) | ((cells[i, 1] + _OFF) << 21) | (cells[i, 2] + _OFF)
-    return keys, (1 << 63) - 1, False
+        k = keys[i]
+        keys[i] = (((k >> 42) - lo0) * ny + (((k >> 21) & m21) - lo1)) * nz + ((k & m21) - lo2)
+    return keys, nx * ny * nz - 1, False
 
 
 @njit(cache=True, nogil=True)
-def _group(points, labels, order, skeys, num_labels):  # pragma: no cover - compiled
-    """Centroid and majority label (``labels`` empty: none) of each run of equal sorted keys
-    ``skeys`` (the points in ``order``, ascending and stable): the points of a leaf summed from 0 in input order and divided
-    by their number, as ``bincount``; the majority's ties to the smallest label."""
+def _group_packed(points, labels, packed, nb, num_labels):  # pragma: no cover - compiled
+    """Centroid and majority label (``labels`` empty: none) of each leaf, from ``packed``: the
+    sorted values ``key << nb | index`` (``index`` a point's position in the input). Each point's
+    leaf (its rank among the distinct keys) is scattered to its position; then the points are
+    streamed in input order, each added to its leaf's sums (from 0, in input order: what the
+    stable order and ``bincount`` add), and the sums divided by the counts. The majority: a
+    leaf whose points share one label has it; the votes of the other leaves are counted over
+    the sorted order (ties to the smallest label)."""
     n = points.shape[0]
+    mask = (np.int64(1) << nb) - 1
+    inv = np.empty(n, np.int32)
     m = 0
+    prev = np.int64(-1)
     for t in range(n):
-        if t == 0 or skeys[t] != skeys[t - 1]:
+        kk = packed[t] >> nb
+        if t == 0 or kk != prev:
             m += 1
-    cen = np.empty((m, 3))
+            prev = kk
+        inv[packed[t] & mask] = m - 1
+    sums = np.zeros((m, 3))
+    cnt = np.zeros(m, np.int64)
     has = labels.shape[0] > 0
     maj = np.empty(m if has else 0, np.int64)
-    votes = np.zeros(max(num_labels, 1), np.int64)
-    g = 0
-    i = 0
-    while i < n:
-        kk = skeys[i]
-        j = i + 1
-        while j < n and skeys[j] == kk:
-            j += 1
-        sx = 0.0
-        sy = 0.0
-        sz = 0.0
-        best = -1
-        bestc = 0
-        for t in range(i, j):
-            q = order[t]
-            sx += points[q, 0]
-            sy += points[q, 1]
-            sz += points[q, 2]
-            if has:
-                lab = labels[q]
-                v = votes[lab] + 1
-                votes[lab] = v
-                if v > bestc or (v == bestc and lab < best):
-                    best = lab
-                    bestc = v
-        c = np.float64(j - i)
-        cen[g, 0] = sx / c
-        cen[g, 1] = sy / c
-        cen[g, 2] = sz / c
+    mixed = np.zeros(m if has else 0, np.bool_)
+    if has:
+        maj[:] = -1
+    n_mixed = 0
+    for i in range(n):
+        g = inv[i]
+        sums[g, 0] += points[i, 0]
+        sums[g, 1] += points[i, 1]
+        sums[g, 2] += points[i, 2]
+        cnt[g] += 1
         if has:
-            for t in range(i, j):
-                votes[labels[order[t]]] = 0
-            maj[g] = best
-        g += 1
-        i = j
+            lab = labels[i]
+            if maj[g] < 0:
+                maj[g] = lab
+            elif maj[g] != lab and not mixed[g]:
+                mixed[g] = True
+                n_mixed += 1
+    cen = np.empty((m, 3))
+    for g in range(m):
+        c = np.float64(cnt[g])
+        cen[g, 0] = sums[g, 0] / c
+        cen[g, 1] = sums[g, 1] / c
+        cen[g, 2] = sums[g, 2] / c
+    if n_mixed:
+        votes = np.zeros(max(num_labels, 1), np.int64)
+        t = 0
+        g = 0
+        while t < n:
+            j = t + cnt[g]
+            if mixed[g]:
+                best = -1
+                bestc = 0
+                for u in range(t, j):
+                    lab = labels[packed[u] & mask]
+                    v = votes[lab] + 1
+                    votes[lab] = v
+                    if v > bestc or (v == bestc and lab < best):
+                        best = lab
+                        bestc = v
+                for u in range(t, j):
+                    votes[labels[packed[u] & mask]] = 0
+                maj[g] = best
+            g += 1
+            t = j
     return cen, maj
 
 
@@ -184,7 +212,7 @@ def _free_samples(hits, origin, length, fr):  # pragma: no cover - compiled
 
 @njit(cache=True, nogil=True)
 def _free_leaves(hits, origin, length, fr, size):  # pragma: no cover - compiled
-    """The leaves of :func:`_free_samples`' samples, as :func:`_leaf_keys` and :func:`_group`
+    """The leaves of :func:`_free_samples`' samples, as :func:`_leaf_keys` and :func:`_group_packed`
     make them from the samples (without holding the samples): each sample's leaf
     ``floor(x / size)`` found in a hash of the leaves seen so far, its coordinates added to the
     leaf's sums in sample order (from 0); the centroids (sums / count) in increasing
@@ -561,8 +589,13 @@ def downsample(points: np.ndarray, labels, size: float, num_labels: int = 0):
     keys, top, far = _leaf_keys(points, float(size))
     if far:
         return np.zeros((0, 3)), None, True
-    order, skeys = stable_order(keys, top)
-    cen, maj = _group(points, lab, order, skeys, k)
+    nb = max(1, int(len(keys) - 1).bit_length())
+    if int(top).bit_length() + nb > 63:       # too wide to pack with the index: rank the keys
+        keys = np.unique(keys, return_inverse=True)[1].astype(np.int64)
+    keys <<= nb                               # key << nb | index, sorted: the stable order
+    keys |= np.arange(len(keys))
+    keys.sort()
+    cen, maj = _group_packed(points, lab, keys, nb, k)
     return cen, (None if labels is None else maj), False
 
 
@@ -741,5 +774,5 @@ def scan_evidence(points, labels, base, lo, dims, R: int, resolution: float, ell
     return list(_pool.map(lambda a: _scan_evidence(*a), jobs))
 
 
-KERNELS = (_kernel, _pairs, _leaf_keys, _group, _lengths, _free_samples, _free_leaves, _bases, _codes, _scan_evidence,
+KERNELS = (_kernel, _pairs, _leaf_keys, _group_packed, _lengths, _free_samples, _free_leaves, _bases, _codes, _scan_evidence,
            _count_new, _apply)
