@@ -320,25 +320,30 @@ def _rank_select(bufd, bufi, nb, bd, bi, m):  # pragma: no cover - compiled
 
 @njit(cache=True, nogil=True)
 def _bin_table(sbearing, seg_start, seg_len, bins, lo, dense):  # pragma: no cover - compiled
+    """Per pose t: ``lo[t, b]`` the number of its sorted bearings [rad] in bins below b, and
+    ``dense[t]`` two of them share a bin. One pass over the bearings, each bin computed once
+    (``sensor._bin``, as numpy computes it): the bins up to a bearing's own get the count
+    before it (a run of stores), the bins beyond the last one the pose's count."""
     scale = bins / TWO_PI
     for t in range(seg_start.shape[0]):
         a = seg_start[t]
         n = seg_len[t]
-        j = 0
+        b = 0
         prev = -1
-        for b in range(bins):
-            lo[t, b] = j
-            while j < n:
-                v = math.floor((sbearing[a + j] + PI) * scale)  # sensor._bin, as numpy computes it
-                ib = int(v) if v > 0 else 0
-                if ib > bins - 1:
-                    ib = bins - 1
-                if ib != b:
-                    break
-                if prev == b:
-                    dense[t] = True
-                prev = b
-                j += 1
+        for j in range(n):
+            v = math.floor((sbearing[a + j] + PI) * scale)
+            ib = int(v) if v > 0 else 0
+            if ib > bins - 1:
+                ib = bins - 1
+            if ib == prev:
+                dense[t] = True
+            prev = ib
+            while b <= ib:
+                lo[t, b] = j
+                b += 1
+        while b < bins:
+            lo[t, b] = n
+            b += 1
 
 
 def bin_table(sorted_bearings, seg_start, seg_len, bins) -> tuple:

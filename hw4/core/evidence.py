@@ -197,8 +197,7 @@ def count_evidence(grid: Grid, poses, scans, *, model: str = "discrete", semanti
         cls_hit = np.zeros(len(table.ranges), dtype=np.int64)
     _refuse_heavy(grid, poses, table, model, beams, nearest_poses, l, sample_step)
     free = n_classes - 1
-    longest = np.zeros(len(poses))
-    np.maximum.at(longest, table.pose_of, table.ranges)
+    longest = _longest(table, len(poses))
     last_stats.clear()
     if engine == "compiled" and free_samples == "all" and np.all(np.diff(table.first) > 0):
         from . import compiled
@@ -257,6 +256,18 @@ def count_evidence(grid: Grid, poses, scans, *, model: str = "discrete", semanti
                                 k[near], sigma0, l, sample_step, free_samples == "closest",
                                 sample_count)
     return acc.reshape(grid.n_cells, n_classes)
+
+
+def _longest(table, n_poses: int) -> np.ndarray:
+    """(T,) [m] the longest beam of every pose (0 for a pose without beams): the maximum over
+    each pose's block of ranges (``np.maximum.reduceat``; ``np.maximum.at`` on an array of zeros
+    gives the same values, ranges being >= 0, four times slower)."""
+    longest = np.zeros(n_poses)
+    if n_poses and len(table.first) == n_poses + 1 and np.all(np.diff(table.first) > 0):
+        np.maximum(np.maximum.reduceat(table.ranges, table.first[:-1]), 0.0, out=longest)
+    else:
+        np.maximum.at(longest, table.pose_of, table.ranges)
+    return longest
 
 
 def nearest_pose_query(cells, pose_xy, k: int) -> np.ndarray:

@@ -75,13 +75,20 @@ class BeamTable:
         """The table of a list of T scans (2, N) or (3, N) [m], robot frame. ``compiled``: build
         the per-pose bin table with :func:`hw4.core.compiled.bin_table` (the same arrays, one
         pass instead of five numpy passes over its T x BINS entries)."""
-        counts = np.array([np.shape(s)[1] for s in scans])
+        shapes = [np.shape(s) for s in scans]
+        counts = np.array([sh[1] for sh in shapes])
         first = np.concatenate([[0], np.cumsum(counts)])
-        xy = np.concatenate([np.asarray(s, dtype=float)[:2] for s in scans], axis=1)
-        ranges, bearings = polar(xy)
-        if all(np.shape(s)[0] >= 3 for s in scans):
-            labels = np.concatenate([np.asarray(s)[2] for s in scans]).astype(np.int64)
+        rows = {sh[0] for sh in shapes}
+        if len(rows) == 1 and all(type(s) is np.ndarray and s.dtype == np.float64 for s in scans):
+            every = np.concatenate(scans, axis=1)  # one copy of all scans (the same values)
+            xy = every[:2]
+            labels = every[2].astype(np.int64) if every.shape[0] >= 3 else None
         else:
+            xy = np.concatenate([np.asarray(s, dtype=float)[:2] for s in scans], axis=1)
+            labels = (np.concatenate([np.asarray(s)[2] for s in scans]).astype(np.int64)
+                      if all(sh[0] >= 3 for sh in shapes) else None)
+        ranges, bearings = polar(xy)
+        if labels is None:
             labels = np.zeros(len(ranges), dtype=np.int64)
         pose_of = np.repeat(np.arange(len(scans)), counts)
         table = cls(ranges, bearings, labels, pose_of, first)
@@ -93,12 +100,20 @@ class BeamTable:
         # beam index that has it (np.nanargmin returns the first of equal minima).
         key = self.pose_of * 8.0 + self.bearings  # bearings lie in (-4, 4): pose blocks are disjoint
         order = self._order()
+        same_order = self._identity  # scans already in bearing order: no gathers needed
+        pose_o = self.pose_of if same_order else self.pose_of[order]
+        bear_o = self.bearings if same_order else self.bearings[order]
         keep = np.ones(len(order), dtype=bool)
-        keep[1:] = (self.pose_of[order][1:] != self.pose_of[order][:-1]) | (
-            self.bearings[order][1:] != self.bearings[order][:-1])
-        self._sorted = order if keep.all() else order[keep]
-        self._key = key[self._sorted]
-        seg = np.searchsorted(self.pose_of[self._sorted], np.arange(len(self.first)))
+        keep[1:] = (pose_o[1:] != pose_o[:-1]) | (bear_o[1:] != bear_o[:-1])
+        if keep.all():
+            self._sorted = order
+            self._key = key if same_order else key[order]
+            pose_s, bear_s = pose_o, bear_o
+        else:
+            self._sorted = order[keep]
+            self._key = key[self._sorted]
+            pose_s, bear_s = self.pose_of[self._sorted], self.bearings[self._sorted]
+        seg = np.searchsorted(pose_s, np.arange(len(self.first)))
         self._seg_start, self._seg_len = seg[:-1], np.diff(seg)
         # Bin table. With bin(theta) = floor((theta + pi) B / 2 pi), monotone in theta, a bearing
         # in a lower bin than phi lies below phi and one in a higher bin above it. Where every
@@ -109,16 +124,14 @@ class BeamTable:
         self._bin_table = None
         if compiled:
             from .compiled import bin_table
-            self._bin_table, self._dense = bin_table(self.bearings[self._sorted], self._seg_start,
-                                                     self._seg_len, BINS)
+            self._bin_table, self._dense = bin_table(bear_s, self._seg_start, self._seg_len, BINS)
         else:  # the table itself only when asked for (_bin_lo): lookups search the bin keys
-            pose_s = self.pose_of[self._sorted]
-            self._bin_key = pose_s * BINS + _bin(self.bearings[self._sorted])  # ascending
+            self._bin_key = pose_s * BINS + _bin(bear_s)  # ascending
             same = np.zeros(n_poses, dtype=bool)
             two = self._bin_key[1:] == self._bin_key[:-1]  # two bearings of one pose in one bin
             same[pose_s[1:][two]] = True
             self._dense = same
-        self._sorted_bearing = np.append(self.bearings[self._sorted], np.inf)
+        self._sorted_bearing = np.append(bear_s, np.inf)
         if np.all(self._seg_len > 0):  # a pose's sorted bearings: its smallest first, largest last
             self.bearing_min = self._sorted_bearing[self._seg_start]
             self.bearing_max = self._sorted_bearing[self._seg_start + self._seg_len - 1]
@@ -159,13 +172,14 @@ class BeamTable:
     def _order(self) -> np.ndarray:
         """Beam indices sorted by (pose, bearing, index): ``np.lexsort`` of the three, taken scan
         by scan (scans are contiguous blocks), and skipped for scans already in bearing order
-        (a laser's usually are: the order is then the identity)."""
+        (a laser's usually are: the order is then the identity, and ``_identity`` says so)."""
         b = self.bearings
         n = len(b)
         up = np.ones(n, dtype=bool)
         up[1:] = b[1:] >= b[:-1]
         up[self.first[:-1][self.first[:-1] < n]] = True  # a scan's first beam starts its block
-        if up.all():
+        self._identity = bool(up.all())  # (read by _index)
+        if self._identity:
             return np.arange(n)
         order = np.arange(n)
         for t in np.unique(self.pose_of[~up]):
