@@ -373,6 +373,11 @@ def _knn_tiles(cells, pxy, k, tile, out, tie):  # pragma: no cover - compiled
     search. A cell at distance hc from c stops at the first candidate with dc - hc beyond its
     (k+1)-th distance so far (no later one can be nearer). Neighbouring cells so share one
     candidate list, and each cell looks at little more than its own k + 1 poses.
+
+    Per tile, D comes from one vectorised loop of squared distances and a selection
+    (``np.partition``), the candidates from a compaction without branches; per cell, the
+    candidates within its bound u are kept the same way (a store at the end of the kept ones,
+    whose count grows by the test), then ranked (:func:`_rank_select`).
     """
     n = pxy.shape[0]
     nc = cells.shape[0]
@@ -410,6 +415,8 @@ def _knn_tiles(cells, pxy, k, tile, out, tie):  # pragma: no cover - compiled
     bufd = np.empty(n)
     bufi = np.empty(n, np.int64)
     ext = np.empty(m, np.int64)
+    d2all = np.empty(n)
+    d2sel = np.empty(n)
     for b in range(ntx * nty):
         q0 = count[b]
         q1 = count[b + 1]
@@ -427,21 +434,20 @@ def _knn_tiles(cells, pxy, k, tile, out, tie):  # pragma: no cover - compiled
         for q in range(q0, q1):
             i = order[q]
             h = max(h, math.sqrt((cells[i, 0] - mx) ** 2 + (cells[i, 1] - my) ** 2))
-        have = 0
         for t in range(n):
             dx = mx - pxy[t, 0]
             dy = my - pxy[t, 1]
-            have = _insert(dx * dx + dy * dy, t, bd, bi, have, m)
-        rad = (math.sqrt(bd[m - 1]) + 2.0 * h) * (1.0 + 1e-9) + 1e-9
+            d2all[t] = dx * dx + dy * dy
+        for t in range(n):
+            d2sel[t] = d2all[t]
+        dm = np.partition(d2sel, m - 1)[m - 1]
+        rad = (math.sqrt(dm) + 2.0 * h) * (1.0 + 1e-9) + 1e-9
         nc_ = 0
         for t in range(n):
-            dx = mx - pxy[t, 0]
-            dy = my - pxy[t, 1]
-            d = math.sqrt(dx * dx + dy * dy)
-            if d <= rad:
-                cd[nc_] = d
-                ci_[nc_] = t
-                nc_ += 1
+            d = math.sqrt(d2all[t])
+            cd[nc_] = d
+            ci_[nc_] = t
+            nc_ += d <= rad
         srt = np.argsort(cd[:nc_])
         cdist = cd[:nc_][srt]
         cidx = ci_[:nc_][srt]
@@ -470,10 +476,9 @@ def _knn_tiles(cells, pxy, k, tile, out, tie):  # pragma: no cover - compiled
                 dx = cx - pxy[t, 0]
                 dy = cy - pxy[t, 1]
                 d = dx * dx + dy * dy
-                if d <= u2:
-                    bufd[nb] = d
-                    bufi[nb] = t
-                    nb += 1
+                bufd[nb] = d
+                bufi[nb] = t
+                nb += d <= u2
             if nb <= RANK_MAX:
                 _rank_select(bufd, bufi, nb, bd, bi, m)
             else:
