@@ -202,8 +202,6 @@ def phase_times(cfg, scans, method: str, repeat: int):
             codes = C._codes(base, lo, dims)
             order, _ = C.stable_order(codes, int(np.prod(dims)) - 1)
             t = lap("voxel order", t)
-            if vmap._rank is None or len(vmap._rank) < int(np.prod(dims)):
-                vmap._rank = np.full(int(np.prod(dims)), -1, np.int32)
             n_pairs = max(1, len(pts) * (2 * R + 1) ** 3)
             n_vox = min(n_pairs, int(np.prod(dims)))
             dense_k = cfg.num_class if cfg.num_class <= C.DENSE_CLASSES else 0
@@ -213,7 +211,7 @@ def phase_times(cfg, scans, method: str, repeat: int):
             part = C._scan_evidence(pts, labels, base, order, 0, len(pts), lo[0], lo[0] + dims[0],
                                     codes, lo, dims, R, vmap.resolution, vmap.ell ** 2,
                                     C._PIECES / vmap.ell, vmap.sf2, C._pieces(), method == "scsm",
-                                    dense_k, vmap._rank, *scratch)
+                                    dense_k, *scratch)
             t = lap("kernel sums", t)
             blk, vloc = part[0], part[1]
             blo = lo >> _SHIFT

@@ -360,20 +360,23 @@ def _kernel(d2, scale, sf2, table):  # pragma: no cover - compiled
 
 @njit(cache=True, nogil=True)
 def _scan_evidence(points, labels, base, order, t0, t1, x0, x1, codes, lo, dims, R, res, ell2,
-                   scale, sf2, table, counting, dense_k, rank, vloc, vcnt, c0, w0, more, vcode,
-                   acc, ecls, evalue, enext):  # pragma: no cover - compiled
+                   scale, sf2, table, counting, dense_k, vloc, vcnt, c0, w0, more, acc, ecls,
+                   evalue, enext):  # pragma: no cover - compiled
     """Per-scan evidence in a sparse form. The points ``order[t0:t1]`` (raveled voxel order,
     stable) are taken voxel by voxel: for each voxel ``S`` of points and each offset ``o``
     (lexicographic), the target voxel ``S + o`` gets the weights of the points of ``S`` within
     ell of its centre, in their order. Every (voxel, class) thus sums the same weights in the same
     order as point by point, offset by offset (the contributions to one voxel come in the points'
     order either way). ``counting`` (S-CSM): every point adds 1 to its own voxel (``R`` = 0).
-    Only voxels with x index in ``[x0, x1)`` are summed (a thread's share). ``rank`` (at least
-    the box's size, all -1) maps a voxel's raveled code to its local voxel while the scan is
-    summed; its entries are set back to -1 before returning.
+    Only voxels with x index in ``[x0, x1)`` are summed (a thread's share). A target's local
+    voxel is looked up in a ring of x slabs of the box (``2^ceil(log2(2 R + 1))`` slabs of
+    ``dims[1] * dims[2]`` int32, at most the box): the voxels of points come in increasing x, so
+    a target's slab lies within ``R`` of the current one, and a slab's slot is cleared (only the
+    entries set, from a list per slot) when a slab ``2^...`` further on takes it. The ring stays
+    in cache where a box-sized table would not.
 
     ``vloc`` .. ``enext`` are scratch arrays kept by the caller (``vloc`` at least 64 per block
-    the scan can touch, ``vcnt`` .. ``vcode`` at least one per voxel it can touch, ``acc``
+    the scan can touch, ``vcnt`` .. ``more`` at least one per voxel it can touch, ``acc``
     ``dense_k`` per voxel, the list ``ecls``, ``evalue``, ``enext`` one per pair it can make:
     nothing grows in the loop).
     Returns ``blk`` (per block of the scan's box of 4^3-voxel blocks: its local block, -1 if not
@@ -396,6 +399,18 @@ def _scan_evidence(points, labels, base, order, t0, t1, x0, x1, codes, lo, dims,
     cap = 16                           # points of one voxel held at a time (grows)
     sq = np.empty((cap, 3, w))        # per point, axis and offset: the squared distance
     low = np.zeros((3, w))            # per axis and offset: its smallest over the voxel's points
+    labs = np.empty(cap, np.int64)    # per point of the voxel: its class
+    kbuf = np.empty(cap)              # per point of the voxel: its weight for the current target
+    nslot = 1
+    while nslot < w:
+        nslot *= 2
+    smask = nslot - 1
+    if nslot > dims[0]:
+        nslot = dims[0]               # slab x - lo[0] < dims[0] <= nslot: its own slot
+    ring = np.full(nslot * s1, -1, np.int32)     # slot * s1 + (y, z) code: local voxel, -1
+    held = np.full(nslot, -1, np.int64)          # the slab x each slot holds
+    nset = np.zeros(nslot, np.int64)             # entries set in each slot, listed in setlist
+    setlist = np.empty(nslot * s1, np.int32)
     t = t0
     while t < t1:
         i = order[t]
@@ -405,16 +420,22 @@ def _scan_evidence(points, labels, base, order, t0, t1, x0, x1, codes, lo, dims,
             u += 1
         n = u - t
         bx, by, bz = base[i, 0], base[i, 1], base[i, 2]
-        if not counting:
-            if n > cap:
-                cap = 2 * n
-                sq = np.empty((cap, 3, w))
+        if n > cap:
+            cap = 2 * n
+            sq = np.empty((cap, 3, w))
+            labs = np.empty(cap, np.int64)
+            kbuf = np.empty(cap)
+        if counting:
+            for p in range(n):
+                labs[p] = labels[order[t + p]]
+        else:
             for a in range(w):
                 low[0, a] = np.inf
                 low[1, a] = np.inf
                 low[2, a] = np.inf
             for p in range(n):
                 q = order[t + p]
+                labs[p] = labels[q]
                 for a in range(w):
                     dx = points[q, 0] - (bx + ((a - R) + 0.5)) * res
                     dy = points[q, 1] - (by + ((a - R) + 0.5)) * res
@@ -429,50 +450,76 @@ def _scan_evidence(points, labels, base, order, t0, t1, x0, x1, codes, lo, dims,
             vx = bx + a - R
             if low[0, a] >= ell2 or vx < x0 or vx >= x1:
                 continue
+            slot = (vx - lo[0]) & smask
+            if held[slot] != vx:      # a new slab takes the slot: clear the entries set
+                roff = slot * s1
+                for h in range(nset[slot]):
+                    ring[roff + setlist[roff + h]] = -1
+                nset[slot] = 0
+                held[slot] = vx
             for b in range(w):
                 if low[0, a] + low[1, b] >= ell2:   # no point of S within ell of this row
                     continue
                 vy = by + b - R
+                sxy = low[0, a] + low[1, b]
                 for cz in range(w):
+                    if sxy + low[2, cz] >= ell2:   # no point of S within ell of this voxel
+                        continue
                     vz = bz + cz - R
-                    tcode = code + (a - R) * s1 + (b - R) * dims[2] + (cz - R)
-                    v = -1
+                    yz = (vy - lo[1]) * dims[2] + (vz - lo[2])
+                    ridx = slot * s1 + yz
+                    m_in = 0          # pairs within ell, their first point, their weights
+                    first = n
                     for p in range(n):
                         if counting:
-                            k = 1.0
-                        else:
+                            kk = 1.0
+                            inside = True
+                        else:        # branch-free: a weight 0 outside ell (adding it: a no-op)
                             d2 = (sq[p, 0, a] + sq[p, 1, b]) + sq[p, 2, cz]
-                            if d2 >= ell2:
-                                continue
-                            k = _kernel(d2, scale, sf2, table)
-                        c = labels[order[t + p]]
-                        if v < 0:
-                            v = rank[tcode]
-                        if v < 0:    # the voxel's first pair of this scan (its block's, maybe)
-                            bc = (((vx >> 2) - blo0) * bd1 + ((vy >> 2) - blo1)) * bd2 + ((vz >> 2) - blo2)
-                            lb = blk[bc]
-                            if lb < 0:
-                                lb = nb
-                                blk[bc] = lb
-                                vloc[lb * 64: lb * 64 + 64] = -1
-                                nb += 1
-                            v = nv
-                            vloc[lb * 64 + (((vx & 3) << 4) | ((vy & 3) << 2) | (vz & 3))] = v
-                            vcnt[v] = 0
-                            c0[v] = c
-                            w0[v] = 0.0
-                            more[v] = -1
-                            for cq in range(dense_k):
-                                acc[v * dense_k + cq] = 0.0
-                            vcode[v] = tcode
-                            rank[tcode] = v
-                            nv += 1
-                        vcnt[v] += 1
-                        if dense_k:
-                            acc[v * dense_k + c] += k
+                            inside = d2 < ell2
+                            kk = _kernel(d2 if inside else 0.0, scale, sf2, table)
+                            kk = kk if inside else 0.0
+                        kbuf[p] = kk
+                        m_in += inside
+                        first = min(first, p if inside else n)
+                    if m_in == 0:
+                        continue
+                    v = ring[ridx]
+                    if v < 0:    # the voxel's first pair of this scan (its block's, maybe)
+                        bc = (((vx >> 2) - blo0) * bd1 + ((vy >> 2) - blo1)) * bd2 + ((vz >> 2) - blo2)
+                        lb = blk[bc]
+                        if lb < 0:
+                            lb = nb
+                            blk[bc] = lb
+                            for h in range(lb * 64, lb * 64 + 64):
+                                vloc[h] = -1
+                            nb += 1
+                        v = nv
+                        vloc[lb * 64 + (((vx & 3) << 4) | ((vy & 3) << 2) | (vz & 3))] = v
+                        vcnt[v] = 0
+                        c0[v] = labs[first]
+                        w0[v] = 0.0
+                        more[v] = -1
+                        for cq in range(dense_k):
+                            acc[v * dense_k + cq] = 0.0
+                        ring[ridx] = v
+                        setlist[slot * s1 + nset[slot]] = yz
+                        nset[slot] += 1
+                        nv += 1
+                    vcnt[v] += m_in
+                    if dense_k:
+                        for p in range(first, n):
+                            acc[v * dense_k + labs[p]] += kbuf[p]
+                        continue
+                    cv = c0[v]
+                    wv = w0[v]
+                    for p in range(first, n):
+                        c = labs[p]
+                        kk = kbuf[p]
+                        if c == cv:
+                            wv += kk
                             continue
-                        if c0[v] == c:
-                            w0[v] += k
+                        if kk == 0.0:   # outside ell (or a weight 0): adds nothing
                             continue
                         e = more[v]
                         while e >= 0 and ecls[e] != c:
@@ -484,10 +531,9 @@ def _scan_evidence(points, labels, base, order, t0, t1, x0, x1, codes, lo, dims,
                             enext[e] = more[v]
                             more[v] = e
                             ne += 1
-                        evalue[e] += k
+                        evalue[e] += kk
+                    w0[v] = wv
         t = u
-    for v in range(nv):
-        rank[vcode[v]] = -1
     nc = 0 if dense_k else nv
     return (blk, vloc[:nb * 64], vcnt[:nv], c0[:nc], w0[:nc], more[:nc], ecls[:ne], evalue[:ne],
             enext[:ne], acc[:nv * dense_k])
@@ -717,13 +763,13 @@ def _scratch(store: list, j: int, n_vox: int, n_blk: int, n_pairs: int, dense_k:
         store.append(None)
     have = store[j]
     if (have is None or len(have[1]) < n_vox or len(have[0]) < 64 * n_blk
-            or len(have[6]) < n_vox * dense_k or len(have[7]) < n_pairs):
-        old = (0, 0, 0) if have is None else (len(have[1]), len(have[0]) // 64, len(have[7]))
+            or len(have[5]) < n_vox * dense_k or len(have[6]) < n_pairs):
+        old = (0, 0, 0) if have is None else (len(have[1]), len(have[0]) // 64, len(have[6]))
         nv = max(n_vox, old[0] + old[0] // 4)
         nb = max(n_blk, old[1] + old[1] // 4)
         ne = max(n_pairs, old[2] + old[2] // 4)
         have = (np.empty(64 * nb, np.int32), np.empty(nv, np.int64), np.empty(nv, np.int32),
-                np.empty(nv), np.empty(nv, np.int32), np.empty(nv, np.int64),
+                np.empty(nv), np.empty(nv, np.int32),
                 np.empty(nv * dense_k), np.empty(ne, np.int32), np.empty(ne), np.empty(ne, np.int32))
         store[j] = have
     return have
@@ -731,11 +777,9 @@ def _scratch(store: list, j: int, n_vox: int, n_blk: int, n_pairs: int, dense_k:
 
 def scan_evidence(points, labels, base, lo, dims, R: int, resolution: float, ell: float,
                   sf2: float, counting: bool, n_threads: int | None = None, num_class: int = 0,
-                  rank: np.ndarray | None = None, scratch: list | None = None):
+                  scratch: list | None = None):
     """The sparse evidence of one scan's training points (see :func:`_scan_evidence`), as a list
     of parts, one per thread, whose blocks follow each other in key order (x slabs of blocks).
-    ``rank``: an int32 scratch array of -1 at least as long as the box (``prod(dims)``), kept by the
-    caller from scan to scan (the threads use disjoint parts of it); by default a new one.
     ``scratch``: a list the caller keeps from scan to scan (the parts are views of it, valid until
     the next call with it); by default new arrays."""
     global _pool
@@ -749,11 +793,9 @@ def scan_evidence(points, labels, base, lo, dims, R: int, resolution: float, ell
     bx = lo[0] + scodes // (dims[1] * dims[2])          # voxel x of the sorted points
     cuts = np.unique(np.quantile(bx, np.arange(1, n_threads) / n_threads).astype(np.int64) >> 2) << 2
     edges = [int(lo[0])] + [int(c) for c in cuts if lo[0] < c < lo[0] + dims[0]] + [int(lo[0] + dims[0])]
-    if rank is None or len(rank) < n_box:
-        rank = np.full(n_box, -1, np.int32)
     dense_k = int(num_class) if 0 < num_class <= DENSE_CLASSES else 0
     const = (codes, lo, dims, int(R), float(resolution), float(ell) ** 2, _PIECES / float(ell),
-             float(sf2), _pieces(), bool(counting), dense_k, rank)
+             float(sf2), _pieces(), bool(counting), dense_k)
     n_blk = int(np.prod(((lo + dims - 1) >> 2) - (lo >> 2) + 1))
     w3 = (2 * int(R) + 1) ** 3
     store = [] if scratch is None else scratch

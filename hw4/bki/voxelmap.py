@@ -42,7 +42,6 @@ _SHIFT = 2               # log2(B)
 _OFF = np.int64(1 << 20)  # block index offset for packing; |block index| < 2^20
 _MAX_BOX = 1 << 24       # most voxels in one scan's scratch box of voxels
 _MAX_DIRECT = 1 << 21    # most (voxel, class) counts of a scan's box binned without compaction
-_KEEP_RANK = 1 << 23     # compiled engine: a scratch of at most this many int32 is kept between scans
 
 UNKNOWN, FREE, OCCUPIED = 0, 1, 2
 METHODS = ("sbki", "scsm")
@@ -153,7 +152,6 @@ class VoxelMap:
             raise InputError(f"unknown engine {engine!r}; use one of {', '.join(ENGINES)}.")
         self.engine = engine
         self.threads = threads   # compiled engine; None: HW4_THREADS (default 1)
-        self._rank = None        # compiled engine: voxel code -> local voxel while a scan is summed
         self._scratch = []       # compiled engine: per thread, the scratch of a scan's sums
         for nm, v in (("resolution", resolution), ("ell", ell), ("sf2", sf2), ("prior", prior)):
             if not (np.isfinite(v) and v > 0):
@@ -236,13 +234,9 @@ class VoxelMap:
         """The compiled engine: the scan's sparse evidence (one part per thread, blocks of
         consecutive x slabs), then its merge into the pool, part after part (key order)."""
         from .compiled import _apply, _count_new, scan_evidence
-        n_box = int(np.prod(dims.astype(np.int64)))
-        if self._rank is None or len(self._rank) < n_box:   # scratch of -1, kept from scan to scan
-            grown = max(n_box, len(self._rank) * 5 // 4 if self._rank is not None else 0)
-            self._rank = np.full(grown, -1, np.int32) if n_box <= _KEEP_RANK else None
         parts = scan_evidence(np.ascontiguousarray(points), np.ascontiguousarray(labels), base, lo,
                               dims, R, self.resolution, self.ell, self.sf2, self.method == "scsm",
-                              self.threads, self.num_class, self._rank, self._scratch)
+                              self.threads, self.num_class, self._scratch)
         blo = lo >> _SHIFT
         bdims = tuple(int(x) for x in ((lo + dims - 1) >> _SHIFT) - blo + 1)
         for blk, vloc, vcnt, c0, w0, more, ecls, evalue, enext, acc in parts:
