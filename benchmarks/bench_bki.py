@@ -211,7 +211,7 @@ def phase_times(cfg, scans, method: str, repeat: int):
             part = C._scan_evidence(pts, labels, base, order, 0, len(pts), lo[0], lo[0] + dims[0],
                                     codes, lo, dims, R, vmap.resolution, vmap.ell ** 2,
                                     C._PIECES / vmap.ell, vmap.sf2, C._pieces(), method == "scsm",
-                                    dense_k, *scratch)
+                                    dense_k, C.window_span(R, vmap.resolution, vmap.ell), *scratch)
             t = lap("kernel sums", t)
             blk, vloc = part[0], part[1]
             blo = lo >> _SHIFT

@@ -360,20 +360,25 @@ def _kernel(d2, scale, sf2, table):  # pragma: no cover - compiled
 
 @njit(cache=True, nogil=True)
 def _scan_evidence(points, labels, base, order, t0, t1, x0, x1, codes, lo, dims, R, res, ell2,
-                   scale, sf2, table, counting, dense_k, vloc, vcnt, c0, w0, more, acc, ecls,
-                   evalue, enext):  # pragma: no cover - compiled
+                   scale, sf2, table, counting, dense_k, span, vloc, vcnt, c0, w0, more, acc,
+                   ecls, evalue, enext):  # pragma: no cover - compiled
     """Per-scan evidence in a sparse form. The points ``order[t0:t1]`` (raveled voxel order,
-    stable) are taken voxel by voxel: for each voxel ``S`` of points and each offset ``o``
-    (lexicographic), the target voxel ``S + o`` gets the weights of the points of ``S`` within
-    ell of its centre, in their order. Every (voxel, class) thus sums the same weights in the same
-    order as point by point, offset by offset (the contributions to one voxel come in the points'
-    order either way). ``counting`` (S-CSM): every point adds 1 to its own voxel (``R`` = 0).
-    Only voxels with x index in ``[x0, x1)`` are summed (a thread's share). A target's local
-    voxel is looked up in a ring of x slabs of the box (``2^ceil(log2(2 R + 1))`` slabs of
-    ``dims[1] * dims[2]`` int32, at most the box): the voxels of points come in increasing x, so
-    a target's slab lies within ``R`` of the current one, and a slab's slot is cleared (only the
-    entries set, from a list per slot) when a slab ``2^...`` further on takes it. The ring stays
-    in cache where a box-sized table would not.
+    stable) are taken one by one, and each point's pairs in lexicographic offset order: per
+    (voxel, class) the weights are summed from 0 in the points' order, as
+    :func:`hw4.bki.kernel_sums.kernel_sums` sums them. ``counting`` (S-CSM): every point adds 1
+    to its own voxel (``R`` = 0). Only voxels with x index in ``[x0, x1)`` are summed (a
+    thread's share).
+
+    Per point and axis, the offsets whose squared distance is below ``ell2`` are consecutive
+    (the distance is unimodal in the offset); at most ``span`` of them for any point in exact
+    arithmetic (``ceil(2 ell / r)``, capped at ``2 R + 1``). The point's candidates are the
+    ``span^3`` offsets of the window that starts at the first such offset per axis (a point with
+    more per axis, by rounding, takes all ``(2 R + 1)^3``); those within ell are listed without
+    branches, then their weights summed. A target's local voxel is looked up in a ring of x
+    slabs of the box (``2^ceil(log2(2 R + 1))`` slabs of ``dims[1] * dims[2]`` int32, at most
+    the box): the points come in increasing x, so a target's slab lies within ``R`` of the
+    current one, and a slot is cleared (only the entries set, from a list per slot) when a slab
+    further on takes it. The ring stays in cache where a box-sized table would not.
 
     ``vloc`` .. ``enext`` are scratch arrays kept by the caller (``vloc`` at least 64 per block
     the scan can touch, ``vcnt`` .. ``more`` at least one per voxel it can touch, ``acc``
@@ -393,14 +398,10 @@ def _scan_evidence(points, labels, base, order, t0, t1, x0, x1, codes, lo, dims,
     blk = np.full(bd0 * bd1 * bd2, -1, np.int32)
     w = 2 * R + 1
     s1 = dims[1] * dims[2]
+    d2z = dims[2]
     nb = 0
     nv = 0
     ne = 0
-    cap = 16                           # points of one voxel held at a time (grows)
-    sq = np.empty((cap, 3, w))        # per point, axis and offset: the squared distance
-    low = np.zeros((3, w))            # per axis and offset: its smallest over the voxel's points
-    labs = np.empty(cap, np.int64)    # per point of the voxel: its class
-    kbuf = np.empty(cap)              # per point of the voxel: its weight for the current target
     nslot = 1
     while nslot < w:
         nslot *= 2
@@ -411,129 +412,138 @@ def _scan_evidence(points, labels, base, order, t0, t1, x0, x1, codes, lo, dims,
     held = np.full(nslot, -1, np.int64)          # the slab x each slot holds
     nset = np.zeros(nslot, np.int64)             # entries set in each slot, listed in setlist
     setlist = np.empty(nslot * s1, np.int32)
-    t = t0
-    while t < t1:
+    sq = np.empty((3, w))             # per axis and offset: the point's squared distance
+    L = min(max(span, 1), w)
+    w3 = w * w * w
+    cand_d2 = np.empty(w3)            # the point's pairs within ell: squared distance, ring
+    cand_r = np.empty(w3, np.int64)   # index, voxel (x, y, z)
+    cand_v = np.empty((w3, 3), np.int64)
+    prev_x = np.int64(-(1 << 62))
+    for t in range(t0, t1):
         i = order[t]
-        code = codes[i]
-        u = t + 1
-        while u < t1 and codes[order[u]] == code:
-            u += 1
-        n = u - t
         bx, by, bz = base[i, 0], base[i, 1], base[i, 2]
-        if n > cap:
-            cap = 2 * n
-            sq = np.empty((cap, 3, w))
-            labs = np.empty(cap, np.int64)
-            kbuf = np.empty(cap)
-        if counting:
-            for p in range(n):
-                labs[p] = labels[order[t + p]]
-        else:
+        c = labels[i]
+        if bx != prev_x:              # the slabs within R of this x: their slots
+            prev_x = bx
             for a in range(w):
-                low[0, a] = np.inf
-                low[1, a] = np.inf
-                low[2, a] = np.inf
-            for p in range(n):
-                q = order[t + p]
-                labs[p] = labels[q]
-                for a in range(w):
-                    dx = points[q, 0] - (bx + ((a - R) + 0.5)) * res
-                    dy = points[q, 1] - (by + ((a - R) + 0.5)) * res
-                    dz = points[q, 2] - (bz + ((a - R) + 0.5)) * res
-                    sq[p, 0, a] = dx * dx
-                    sq[p, 1, a] = dy * dy
-                    sq[p, 2, a] = dz * dz
-                    low[0, a] = min(low[0, a], dx * dx)
-                    low[1, a] = min(low[1, a], dy * dy)
-                    low[2, a] = min(low[2, a], dz * dz)
-        for a in range(w):
-            vx = bx + a - R
-            if low[0, a] >= ell2 or vx < x0 or vx >= x1:
-                continue
-            slot = (vx - lo[0]) & smask
-            if held[slot] != vx:      # a new slab takes the slot: clear the entries set
-                roff = slot * s1
-                for h in range(nset[slot]):
-                    ring[roff + setlist[roff + h]] = -1
-                nset[slot] = 0
-                held[slot] = vx
-            for b in range(w):
-                if low[0, a] + low[1, b] >= ell2:   # no point of S within ell of this row
+                vx = bx + a - R
+                if vx < x0 or vx >= x1:
                     continue
-                vy = by + b - R
-                sxy = low[0, a] + low[1, b]
-                for cz in range(w):
-                    if sxy + low[2, cz] >= ell2:   # no point of S within ell of this voxel
-                        continue
-                    vz = bz + cz - R
-                    yz = (vy - lo[1]) * dims[2] + (vz - lo[2])
-                    ridx = slot * s1 + yz
-                    m_in = 0          # pairs within ell, their first point, their weights
-                    first = n
-                    for p in range(n):
-                        if counting:
-                            kk = 1.0
-                            inside = True
-                        else:        # branch-free: a weight 0 outside ell (adding it: a no-op)
-                            d2 = (sq[p, 0, a] + sq[p, 1, b]) + sq[p, 2, cz]
-                            inside = d2 < ell2
-                            kk = _kernel(d2 if inside else 0.0, scale, sf2, table)
-                            kk = kk if inside else 0.0
-                        kbuf[p] = kk
-                        m_in += inside
-                        first = min(first, p if inside else n)
-                    if m_in == 0:
-                        continue
-                    v = ring[ridx]
-                    if v < 0:    # the voxel's first pair of this scan (its block's, maybe)
-                        bc = (((vx >> 2) - blo0) * bd1 + ((vy >> 2) - blo1)) * bd2 + ((vz >> 2) - blo2)
-                        lb = blk[bc]
-                        if lb < 0:
-                            lb = nb
-                            blk[bc] = lb
-                            for h in range(lb * 64, lb * 64 + 64):
-                                vloc[h] = -1
-                            nb += 1
-                        v = nv
-                        vloc[lb * 64 + (((vx & 3) << 4) | ((vy & 3) << 2) | (vz & 3))] = v
-                        vcnt[v] = 0
-                        c0[v] = labs[first]
-                        w0[v] = 0.0
-                        more[v] = -1
-                        for cq in range(dense_k):
-                            acc[v * dense_k + cq] = 0.0
-                        ring[ridx] = v
-                        setlist[slot * s1 + nset[slot]] = yz
-                        nset[slot] += 1
-                        nv += 1
-                    vcnt[v] += m_in
-                    if dense_k:
-                        for p in range(first, n):
-                            acc[v * dense_k + labs[p]] += kbuf[p]
-                        continue
-                    cv = c0[v]
-                    wv = w0[v]
-                    for p in range(first, n):
-                        c = labs[p]
-                        kk = kbuf[p]
-                        if c == cv:
-                            wv += kk
-                            continue
-                        if kk == 0.0:   # outside ell (or a weight 0): adds nothing
-                            continue
-                        e = more[v]
-                        while e >= 0 and ecls[e] != c:
-                            e = enext[e]
-                        if e < 0:
-                            e = ne
-                            ecls[e] = c
-                            evalue[e] = 0.0
-                            enext[e] = more[v]
-                            more[v] = e
-                            ne += 1
-                        evalue[e] += kk
-                    w0[v] = wv
-        t = u
+                slot = (vx - lo[0]) & smask
+                if held[slot] != vx:  # a new slab takes the slot: clear the entries set
+                    roff = slot * s1
+                    for h in range(nset[slot]):
+                        ring[roff + setlist[roff + h]] = -1
+                    nset[slot] = 0
+                    held[slot] = vx
+        m = 0
+        if counting:
+            if bx >= x0 and bx < x1:
+                cand_d2[0] = 0.0
+                cand_r[0] = ((bx - lo[0]) & smask) * s1 + (by - lo[1]) * d2z + (bz - lo[2])
+                cand_v[0, 0] = bx
+                cand_v[0, 1] = by
+                cand_v[0, 2] = bz
+                m = 1
+        else:
+            px, py, pz = points[i, 0], points[i, 1], points[i, 2]
+            f0 = w
+            f1 = w
+            f2 = w
+            n0 = 0
+            n1 = 0
+            n2 = 0
+            for a in range(w):
+                dx = px - (bx + ((a - R) + 0.5)) * res
+                dy = py - (by + ((a - R) + 0.5)) * res
+                dz = pz - (bz + ((a - R) + 0.5)) * res
+                sq[0, a] = dx * dx
+                sq[1, a] = dy * dy
+                sq[2, a] = dz * dz
+                ok0 = dx * dx < ell2
+                ok1 = dy * dy < ell2
+                ok2 = dz * dz < ell2
+                n0 += ok0
+                n1 += ok1
+                n2 += ok2
+                f0 = min(f0, a if ok0 else w)
+                f1 = min(f1, a if ok1 else w)
+                f2 = min(f2, a if ok2 else w)
+            if n0 == 0 or n1 == 0 or n2 == 0:
+                continue
+            l0 = L
+            l1 = L
+            l2 = L
+            if n0 > L or n1 > L or n2 > L:   # more than span offsets (rounding): all of them
+                f0 = f1 = f2 = 0
+                l0 = l1 = l2 = w
+            f0 = min(f0, w - l0)
+            f1 = min(f1, w - l1)
+            f2 = min(f2, w - l2)
+            for a in range(f0, f0 + l0):
+                vx = bx + a - R
+                inx = vx >= x0 and vx < x1
+                rx = ((vx - lo[0]) & smask) * s1
+                for b in range(f1, f1 + l1):
+                    vy = by + b - R
+                    sxy = sq[0, a] + sq[1, b]
+                    rxy = rx + (vy - lo[1]) * d2z - lo[2]
+                    for cz in range(f2, f2 + l2):
+                        vz = bz + cz - R
+                        d2 = sxy + sq[2, cz]
+                        cand_d2[m] = d2
+                        cand_r[m] = rxy + vz
+                        cand_v[m, 0] = vx
+                        cand_v[m, 1] = vy
+                        cand_v[m, 2] = vz
+                        m += (d2 < ell2) and inx
+        for j in range(m):
+            k = 1.0 if counting else _kernel(cand_d2[j], scale, sf2, table)
+            ridx = cand_r[j]
+            v = ring[ridx]
+            if v < 0:    # the voxel's first pair of this scan (its block's, maybe)
+                vx = cand_v[j, 0]
+                vy = cand_v[j, 1]
+                vz = cand_v[j, 2]
+                bc = (((vx >> 2) - blo0) * bd1 + ((vy >> 2) - blo1)) * bd2 + ((vz >> 2) - blo2)
+                lb = blk[bc]
+                if lb < 0:
+                    lb = nb
+                    blk[bc] = lb
+                    for h in range(lb * 64, lb * 64 + 64):
+                        vloc[h] = -1
+                    nb += 1
+                v = nv
+                vloc[lb * 64 + (((vx & 3) << 4) | ((vy & 3) << 2) | (vz & 3))] = v
+                vcnt[v] = 0
+                c0[v] = c
+                w0[v] = 0.0
+                more[v] = -1
+                for cq in range(dense_k):
+                    acc[v * dense_k + cq] = 0.0
+                ring[ridx] = v
+                slot = (vx - lo[0]) & smask
+                setlist[slot * s1 + nset[slot]] = ridx - slot * s1
+                nset[slot] += 1
+                nv += 1
+            vcnt[v] += 1
+            if dense_k:
+                acc[v * dense_k + c] += k
+                continue
+            if c0[v] == c:
+                w0[v] += k
+                continue
+            e = more[v]
+            while e >= 0 and ecls[e] != c:
+                e = enext[e]
+            if e < 0:
+                e = ne
+                ecls[e] = c
+                evalue[e] = 0.0
+                enext[e] = more[v]
+                more[v] = e
+                ne += 1
+            evalue[e] += k
     nc = 0 if dense_k else nv
     return (blk, vloc[:nb * 64], vcnt[:nv], c0[:nc], w0[:nc], more[:nc], ecls[:ne], evalue[:ne],
             enext[:ne], acc[:nv * dense_k])
@@ -710,6 +720,16 @@ def stable_order(keys: np.ndarray, top: int):
     return order, keys[order]
 
 
+def window_span(R: int, resolution: float, ell: float) -> int:
+    """Most consecutive voxel offsets per axis whose centres a point can have within ``ell``
+    (exact arithmetic): the integers in an open interval of length ``2 ell / r``, i.e.
+    ``ceil(2 ell / r)``, at most ``2 R + 1`` (``R`` = 0: 1). :func:`_scan_evidence` checks it per
+    point and takes every offset where rounding lets more in."""
+    if R == 0:
+        return 1
+    return int(min(2 * R + 1, max(1, np.ceil(2.0 * float(ell) / float(resolution)))))
+
+
 def threads() -> int:
     """Threads of the compiled update: ``HW4_THREADS`` (default 1). The map is the same bit for bit
     on any number: each thread sums the voxels of its own range of x (whole blocks), over the same
@@ -795,7 +815,7 @@ def scan_evidence(points, labels, base, lo, dims, R: int, resolution: float, ell
     edges = [int(lo[0])] + [int(c) for c in cuts if lo[0] < c < lo[0] + dims[0]] + [int(lo[0] + dims[0])]
     dense_k = int(num_class) if 0 < num_class <= DENSE_CLASSES else 0
     const = (codes, lo, dims, int(R), float(resolution), float(ell) ** 2, _PIECES / float(ell),
-             float(sf2), _pieces(), bool(counting), dense_k)
+             float(sf2), _pieces(), bool(counting), dense_k, window_span(R, resolution, ell))
     n_blk = int(np.prod(((lo + dims - 1) >> 2) - (lo >> 2) + 1))
     w3 = (2 * int(R) + 1) ** 3
     store = [] if scratch is None else scratch
