@@ -255,6 +255,12 @@ class VoxelMap:
         if need > len(self.count):
             first = self.n_voxels
             cap = max(need, len(self.count) + len(self.count) // 2)
+            try:    # in place (realloc: the pages kept, no copy) unless something views the pool
+                self.ev.resize((cap, self.num_class))
+                self.count.resize(cap)
+                return
+            except ValueError:
+                pass
             ev = np.zeros((cap, self.num_class))
             ev[:first] = self.ev[:first]
             count = np.zeros(cap, np.int64)
