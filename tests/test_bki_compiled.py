@@ -262,8 +262,8 @@ def test_the_compiling_notice_only_on_a_terminal_and_only_when_not_cached(monkey
 
 @pytest.mark.parametrize("K, threads", [(4, 1), (20, 1), (4, 2)])
 def test_the_sparse_path_for_a_reach_of_3_equals_numpy(K, threads):
-    """VoxelMap sums a reach of 2+ voxels in two passes (pair_sums); the sparse path, with its
-    branch-free offsets for such reaches, must give the same map when called on its own."""
+    """A reach of 3 voxels (343 offsets, a window of 6 per axis) through the sparse path, called
+    on its own: the same map as numpy."""
     rng = np.random.default_rng(K)
     a = VoxelMap(0.1, K, "sbki", engine="numpy")
     b = VoxelMap(0.1, K, "sbki", threads=threads)

@@ -18,3 +18,41 @@ def test_downsample_equals_numpy(spread, labelled):
     got, gmaj, far = compiled.downsample(pts, lab, 0.1, 5 if labelled else 0)
     assert not far and np.array_equal(got, cen)
     assert (gmaj is None and maj is None) or np.array_equal(gmaj, maj)
+
+
+@pytest.mark.parametrize("method, res, ell, K", [("sbki", 0.3, 0.3, 20), ("sbki", 0.1, 0.3, 4),
+                                                 ("sbki", 0.2, 0.5, 6), ("scsm", 0.1, 0.3, 3)])
+@pytest.mark.parametrize("span", [None, 1])
+def test_point_windows_equal_numpy(monkeypatch, method, res, ell, K, span):
+    """The kernel sums point by point over each axis's window of reachable offsets; with a
+    window of 1 (every point then has more offsets within ell: the whole neighbourhood) the same
+    map as with the natural window and as the numpy engine."""
+    from hw4.bki import VoxelMap
+    if span is not None:
+        monkeypatch.setattr(compiled, "window_span", lambda R, r, e: span)
+    rng = np.random.default_rng(11)
+    a = VoxelMap(res, K, method, ell=ell, engine="numpy")
+    b = VoxelMap(res, K, method, ell=ell, threads=1)
+    for n in (3000, 2000):
+        pts = rng.normal(0, 1.5, (n, 3))
+        lab = rng.integers(0, K, n)
+        a.update(pts, lab)
+        b.update(pts, lab)
+    va, vb = a.evidence(), b.evidence()
+    assert len(va[0]) == len(vb[0]) > 0
+    assert all(np.array_equal(x, y) for x, y in zip(va, vb))
+
+
+def test_pool_grows_in_place_or_by_a_copy_when_viewed():
+    """The pool grows in place (resize) unless something views it; the map is the same."""
+    from hw4.bki import VoxelMap
+    rng = np.random.default_rng(5)
+    scans = [(rng.normal(0, s, (5000, 3)), rng.integers(0, 8, 5000)) for s in (2, 5, 9)]
+    a, b = VoxelMap(0.3, 8), VoxelMap(0.3, 8)
+    views = []
+    for pts, lab in scans:
+        a.update(pts, lab)
+        views.append(b.ev[:3])      # held: b's pool must be copied, not reallocated
+        b.update(pts, lab)
+    assert all(np.array_equal(x, y) for x, y in zip(a.evidence(), b.evidence()))
+    assert len(b.count) > 1024 and all(v.shape == (3, 8) for v in views)

@@ -15,14 +15,16 @@ same bit for bit (the tests compare the two engines):
   :func:`free_leaves` downsamples them as they are made (a hash of leaves, sums in sample
   order), the same centroids without holding the samples.
 * **Evidence of a scan** (:func:`scan_evidence`): the training points in raveled voxel order
-  (stable), taken voxel by voxel (per voxel of points and offset, the points in order: the same
-  order per target voxel as point by point), each pair's kernel weight from the
-  table of :func:`hw4.core.kernel.sparse_kernel_pieces` (as :mod:`hw4.bki.kernel_sums`); per
-  (voxel, class) the weights are summed from 0 in that order into a sparse per-scan structure,
-  which ``_apply`` then adds to the map's evidence. Adding a scan's sum first and the map's value
-  after is the order of the numpy engine (``ev[slot] += add``). For a reach of 2+ voxels per axis
-  (the toy scans: 343 offsets per point) :func:`pair_sums` does the same sums in two passes over a
-  dense box of the scan's voxels (one thread), and the numpy merge adds them.
+  (stable), taken point by point, each point's pairs in lexicographic offset order (as
+  :mod:`hw4.bki.kernel_sums`): per axis only the window of offsets it can reach within ell
+  (:func:`window_span`; all of them where rounding lets more in), the pairs within ell listed
+  without branches, each pair's kernel weight from the table of
+  :func:`hw4.core.kernel.sparse_kernel_pieces`; per (voxel, class) the weights are summed from 0
+  in that order into a sparse per-scan structure (a target's local voxel found in a
+  cache-resident ring of x slabs), which ``_apply`` then adds to the map's evidence. Adding a
+  scan's sum first and the map's value after is the order of the numpy engine
+  (``ev[slot] += add``). The same path serves every reach (the toy scans: up to 6^3 of the 7^3
+  offsets per point).
 
 New voxels take pool slots in (block key, voxel in block) order here (the numpy engine: raveled
 voxel order of the scan's box); the pool's row order is internal, :meth:`VoxelMap.evidence` and
@@ -550,42 +552,6 @@ def _scan_evidence(points, labels, base, order, t0, t1, x0, x1, codes, lo, dims,
 
 
 @njit(cache=True, nogil=True)
-def _pairs(points, labels, base, lo, dims, R, res, ell2, scale, sf2, table, seen, rank, add, cnt):  # pragma: no cover - compiled
-    """Visit every (point, voxel) pair with ``d^2 < ell2``. Without ``rank`` (empty), only mark
-    ``seen[code] = True``; with it, add ``k(d)`` to ``add[rank[code], label]`` and 1 to
-    ``cnt[rank[code]]``. ``code`` is the voxel's raveled index in the box."""
-    marking = rank.shape[0] == 0
-    for i in range(points.shape[0]):
-        px, py, pz = points[i, 0], points[i, 1], points[i, 2]
-        bx, by, bz = base[i, 0], base[i, 1], base[i, 2]
-        c = labels[i]
-        for ox in range(-R, R + 1):
-            dx = px - (bx + (ox + 0.5)) * res
-            sx = dx * dx
-            if sx >= ell2:
-                continue
-            cx = (bx + ox - lo[0]) * dims[1]
-            for oy in range(-R, R + 1):
-                dy = py - (by + (oy + 0.5)) * res
-                sxy = sx + dy * dy
-                if sxy >= ell2:
-                    continue
-                cxy = (cx + by + oy - lo[1]) * dims[2] - lo[2] + bz
-                for oz in range(-R, R + 1):
-                    dz = pz - (bz + (oz + 0.5)) * res
-                    d2 = sxy + dz * dz
-                    if d2 >= ell2:
-                        continue
-                    if marking:
-                        seen[cxy + oz] = True
-                        continue
-                    k = _kernel(d2, scale, sf2, table)
-                    v = rank[cxy + oz]
-                    add[v, c] += k
-                    cnt[v] += 1
-
-
-@njit(cache=True, nogil=True)
 def _count_new(table, rows, lbs, vloc):  # pragma: no cover - compiled
     """Touched voxels (local blocks ``lbs`` at map rows ``rows``) that have no pool slot yet."""
     n = 0
@@ -743,32 +709,6 @@ def threads() -> int:
 _pool = None
 
 
-def pair_sums(points, labels, base, lo, dims, R: int, resolution: float, ell: float, sf2: float,
-              num_class: int):
-    """The (point, voxel) sums of one scan in two passes over a dense box (the first marks the
-    voxels reached, the second sums into a dense (voxels, classes) array), points in raveled voxel
-    order (stable): what :func:`hw4.bki.kernel_sums.kernel_sums` returns (``vt, add, cnt``), the
-    same values. Used for a reach of 2+ voxels, where it is the faster of the two ways here."""
-    lo = np.ascontiguousarray(lo, dtype=np.int64)
-    dims = np.ascontiguousarray(dims, dtype=np.int64)
-    codes = _codes(base, lo, dims)
-    order, _ = stable_order(codes, int(np.prod(dims)) - 1)
-    pts, lab, bs = points[order], labels[order], base[order]
-    args = (pts, lab, bs, lo, dims, int(R), float(resolution), float(ell) ** 2, _PIECES / float(ell),
-            float(sf2), _pieces())
-    n_box = int(np.prod(dims))
-    seen = np.zeros(n_box, np.bool_)
-    _pairs(*args, seen, np.zeros(0, np.int32), np.zeros((0, num_class)), np.zeros(0, np.int64))
-    vt = np.flatnonzero(seen)
-    del seen
-    rank = np.empty(n_box, np.int32)
-    rank[vt] = np.arange(len(vt))
-    add = np.zeros((len(vt), num_class))
-    cnt = np.zeros(len(vt), np.int64)
-    _pairs(*args, np.zeros(0, np.bool_), rank, add, cnt)
-    return vt, add, cnt
-
-
 DENSE_CLASSES = 8
 """Up to this many classes the compiled update sums a scan's evidence per voxel and class in a
 dense array (no per-pair search of the class); beyond, the first class of each voxel inline and
@@ -836,5 +776,5 @@ def scan_evidence(points, labels, base, lo, dims, R: int, resolution: float, ell
     return list(_pool.map(lambda a: _scan_evidence(*a), jobs))
 
 
-KERNELS = (_kernel, _pairs, _leaf_keys, _group_packed, _lengths, _free_samples, _free_leaves, _bases, _codes, _scan_evidence,
+KERNELS = (_kernel, _leaf_keys, _group_packed, _lengths, _free_samples, _free_leaves, _bases, _codes, _scan_evidence,
            _count_new, _apply)

@@ -212,11 +212,7 @@ class VoxelMap:
             self.update(points[order[:half]], labels[order[:half]])
             self.update(points[order[half:]], labels[order[half:]])
             return
-        if self.engine == "compiled" and R >= 2 and self.method == "sbki":
-            from .compiled import pair_sums   # many offsets per point: two passes, dense box, 1 thread
-            self._merge(*pair_sums(np.ascontiguousarray(points), labels, base, lo, dims, R,
-                                   self.resolution, self.ell, self.sf2, self.num_class), lo, dims)
-        elif self.engine == "compiled":
+        if self.engine == "compiled":
             self._update_compiled(points, labels, base, lo, dims, R)
         elif self.method == "scsm":
             stride = np.array([dims[1] * dims[2], dims[2], 1], np.int64)
