@@ -219,10 +219,12 @@ def phase_times(cfg, scans, method: str, repeat: int):
             ub = np.flatnonzero(blk >= 0)
             rows = vmap._rows_for(_pack(np.column_stack(np.unravel_index(ub, bdims)) + blo))
             t = lap("block rows", t)
-            vmap._reserve(C._count_new(vmap.table, rows, blk[ub], vloc))
-            t = lap("pool growth", t)
-            vmap.n_voxels = C._apply(vmap.table, rows, blk[ub], *part[1:], vmap.ev, vmap.count,
-                                     vmap.n_voxels)
+            slot_of, n_voxels = C._assign(vmap.table, rows, blk[ub], vloc, len(part[2]),
+                                          vmap.n_voxels)
+            vmap._reserve(n_voxels - vmap.n_voxels)
+            vmap.n_voxels = n_voxels
+            t = lap("new slots, pool growth", t)
+            C._accumulate(slot_of, *part[2:], vmap.ev, vmap.count)
             lap("sums added", t)
             vmap.n_scans += 1
         best = {k: min(best.get(k, np.inf), v) for k, v in got.items()}
@@ -230,7 +232,7 @@ def phase_times(cfg, scans, method: str, repeat: int):
 
 
 PHASES = ("downsampling", "free samples", "voxel order", "kernel sums", "block rows",
-          "pool growth", "sums added")
+          "new slots, pool growth", "sums added")
 
 
 def phase_benchmark(cfg, scans, repeat: int, res) -> None:

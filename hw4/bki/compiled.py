@@ -21,7 +21,8 @@ same bit for bit (the tests compare the two engines):
   without branches, each pair's kernel weight from the table of
   :func:`hw4.core.kernel.sparse_kernel_pieces`; per (voxel, class) the weights are summed from 0
   in that order into a sparse per-scan structure (a target's local voxel found in a
-  cache-resident ring of x slabs), which ``_apply`` then adds to the map's evidence. Adding a
+  cache-resident ring of x slabs); ``_assign`` gives the new voxels their pool slots and
+  ``_accumulate`` adds the sums to the map's evidence. Adding a
   scan's sum first and the map's value after is the order of the numpy engine
   (``ev[slot] += add``). The same path serves every reach (the toy scans: up to 6^3 of the 7^3
   offsets per point).
@@ -552,47 +553,45 @@ def _scan_evidence(points, labels, base, order, t0, t1, x0, x1, codes, lo, dims,
 
 
 @njit(cache=True, nogil=True)
-def _count_new(table, rows, lbs, vloc):  # pragma: no cover - compiled
-    """Touched voxels (local blocks ``lbs`` at map rows ``rows``) that have no pool slot yet."""
-    n = 0
-    for b in range(lbs.shape[0]):
-        row = rows[b]
-        base = lbs[b] * 64
-        for q in range(64):
-            if vloc[base + q] >= 0 and table[row, q] < 0:
-                n += 1
-    return n
-
-
-@njit(cache=True, nogil=True)
-def _apply(table, rows, lbs, vloc, vcnt, c0, w0, more, ecls, evalue, enext, acc, ev, count,
-           n_voxels):  # pragma: no cover - compiled
-    """Add the scan's evidence to the map's pool; new voxels take the next slots in (block key,
-    voxel) order. Returns the new number of voxels."""
+def _assign(table, rows, lbs, vloc, n_local, n_voxels):  # pragma: no cover - compiled
+    """Pool slot of every touched voxel (local blocks ``lbs`` at map rows ``rows``, ``n_local``
+    local voxels): the voxels without one take the next slots in (block key, voxel) order, set
+    in ``table``. Branch-free over the 64 voxels of each block. Returns the slots per local
+    voxel and the new number of voxels."""
+    slot_of = np.empty(n_local + 1, np.int64)   # the last entry: where untouched voxels write
     for b in range(lbs.shape[0]):
         row = rows[b]
         base = lbs[b] * 64
         for q in range(64):
             v = vloc[base + q]
-            if v < 0:
-                continue
-            s = table[row, q]
-            if s < 0:
-                s = n_voxels
-                table[row, q] = s
-                n_voxels += 1
-            count[s] += vcnt[v]
-            if acc.shape[0]:   # dense sums: every class (adding a 0 leaves a value as it is)
-                K = ev.shape[1]
-                for q in range(K):
-                    ev[s, q] += acc[v * K + q]
-                continue
-            ev[s, c0[v]] += w0[v]
-            e = more[v]
-            while e >= 0:
-                ev[s, ecls[e]] += evalue[e]
-                e = enext[e]
-    return n_voxels
+            s = np.int64(table[row, q])
+            new = (v >= 0) and (s < 0)
+            s = n_voxels if new else s
+            n_voxels += new
+            table[row, q] = s
+            slot_of[v if v >= 0 else n_local] = s
+    return slot_of[:n_local], n_voxels
+
+
+@njit(cache=True, nogil=True)
+def _accumulate(slot_of, vcnt, c0, w0, more, ecls, evalue, enext, acc, ev, count):  # pragma: no cover - compiled
+    """Add the scan's evidence of each local voxel to its pool slot ``slot_of`` (voxel after
+    voxel; the voxels are distinct, so the order does not change a value): its pair count, and
+    per class the scan's sum (``ev[s, c] += sum``, as the numpy engine adds them)."""
+    K = ev.shape[1]
+    dense = acc.shape[0] > 0
+    for v in range(slot_of.shape[0]):
+        s = slot_of[v]
+        count[s] += vcnt[v]
+        if dense:   # dense sums: every class (adding a 0 leaves a value as it is)
+            for q in range(K):
+                ev[s, q] += acc[v * K + q]
+            continue
+        ev[s, c0[v]] += w0[v]
+        e = more[v]
+        while e >= 0:
+            ev[s, ecls[e]] += evalue[e]
+            e = enext[e]
 
 
 # ----------------------------------------------------------------------------- Python side
@@ -777,4 +776,4 @@ def scan_evidence(points, labels, base, lo, dims, R: int, resolution: float, ell
 
 
 KERNELS = (_kernel, _leaf_keys, _group_packed, _lengths, _free_samples, _free_leaves, _bases, _codes, _scan_evidence,
-           _count_new, _apply)
+           _assign, _accumulate)

@@ -229,7 +229,7 @@ class VoxelMap:
     def _update_compiled(self, points, labels, base, lo, dims, R) -> None:
         """The compiled engine: the scan's sparse evidence (one part per thread, blocks of
         consecutive x slabs), then its merge into the pool, part after part (key order)."""
-        from .compiled import _apply, _count_new, scan_evidence
+        from .compiled import _accumulate, _assign, scan_evidence
         parts = scan_evidence(np.ascontiguousarray(points), np.ascontiguousarray(labels), base, lo,
                               dims, R, self.resolution, self.ell, self.sf2, self.method == "scsm",
                               self.threads, self.num_class, self._scratch)
@@ -239,9 +239,14 @@ class VoxelMap:
             ub = np.flatnonzero(blk >= 0)              # touched blocks in key order
             lbs = blk[ub]
             rows = self._rows_for(_pack(np.column_stack(np.unravel_index(ub, bdims)) + blo))
-            self._reserve(_count_new(self.table, rows, lbs, vloc))
-            self.n_voxels = _apply(self.table, rows, lbs, vloc, vcnt, c0, w0, more, ecls, evalue,
-                                   enext, acc, self.ev, self.count, self.n_voxels)
+            if self.n_voxels + len(vcnt) >= np.iinfo(np.int32).max:   # near the limit: refuse
+                self._reserve(int(np.count_nonzero(  # before the table changes
+                    (vloc.reshape(-1, B3)[lbs] >= 0) & (self.table[rows] < 0))))
+            slot_of, n_voxels = _assign(self.table, rows, lbs, vloc, len(vcnt), self.n_voxels)
+            self._reserve(n_voxels - self.n_voxels)
+            self.n_voxels = n_voxels
+            _accumulate(slot_of, vcnt, c0, w0, more, ecls, evalue, enext, acc, self.ev,
+                        self.count)
 
     def _reserve(self, n_new: int) -> None:
         """Room in the pool for ``n_new`` more voxels (grown by half its size at a time)."""
