@@ -130,6 +130,23 @@ TAN_PI_8 = 0.41421356237309503
 
 
 @njit(cache=True, nogil=True, inline="always")
+def _beam_gap(r, diff, lim):  # pragma: no cover - compiled
+    """For 0 <= diff < pi/2 [rad] and r [m]: whether the gap ``r sin(diff)`` (computed so) lies
+    below lim [m], and whether that is certain (farther than ``r EPS + 1e-12`` from lim, as
+    the kernels require of a fast bearing). The sine is skipped where bounds decide with a
+    margin: fl(sin x) <= x (the sine lies below x and rounding cannot pass the float x), so
+    fl(r fl(sin x)) <= fl(r x); and sin x >= x - x^3 / 6. Same outcome as computing it."""
+    tol = r * EPS + 1e-12
+    rx = r * diff
+    if rx < lim - 2.0 * tol - 1e-9:
+        return True, True
+    if r * (diff - diff * diff * diff / 6.0) * (1.0 - 1e-12) > lim + 2.0 * tol + 1e-9:
+        return False, True
+    g_ = r * math.sin(diff)
+    return g_ < lim, abs(g_ - lim) > tol
+
+
+@njit(cache=True, nogil=True, inline="always")
 def _atan2_fast(y, x):  # pragma: no cover - compiled
     """arctan2(y, x) [rad] within 1e-10 (octant reduction, then atan(u) for |u| <= tan(pi/8) by
     its Taylor series to u^21: remainder below 0.4143^23 / 23 < 7e-11)."""
@@ -603,10 +620,8 @@ def _cells_kernel(c0, c1, cells, poses, nn, reach, ranges, cls_hit, srt, key, se
                         elif abs(diff - PI / 2) < EPS:
                             sure = False
                         elif diff < PI / 2:
-                            g_ = r * math.sin(diff)
-                            if abs(g_ - lim) <= r * EPS + 1e-12:
-                                sure = False
-                            near = g_ < lim
+                            near, ok = _beam_gap(r, diff, lim)
+                            sure = sure and ok
                         else:
                             near = r < lim
             if not sure:
@@ -818,10 +833,8 @@ def _pose_pass(c0, c1, cells, poses, nn, ranges, cls_hit, srt, key, seg_start, s
                     elif abs(diff - PI / 2) < EPS:
                         sure = False
                     elif diff < PI / 2:
-                        g_ = r * math.sin(diff)
-                        if abs(g_ - lim) <= r * EPS + 1e-12:
-                            sure = False
-                        near = g_ < lim
+                        near, ok = _beam_gap(r, diff, lim)
+                        sure = sure and ok
                     else:
                         near = r < lim
             if not sure:
@@ -1046,10 +1059,8 @@ def _poses_kernel(row0, row1, gx, gy, poses, reach, ranges, cls_hit, srt, key,
                             elif abs(diff - PI / 2) < EPS:
                                 sure = False
                             elif diff < PI / 2:
-                                g_ = r * math.sin(diff)
-                                if abs(g_ - lim) <= r * EPS + 1e-12:
-                                    sure = False
-                                near = g_ < lim
+                                near, ok = _beam_gap(r, diff, lim)
+                                sure = sure and ok
                             else:
                                 near = r < lim
                 if not sure:
