@@ -101,15 +101,13 @@ def _group_packed(points, labels, packed, nb, num_labels):  # pragma: no cover -
     mask = (np.int64(1) << nb) - 1
     inv = np.empty(n, np.int32)
     m = 0
-    prev = np.int64(-1)
-    for t in range(n):
+    prev = np.int64(-1)               # keys are >= 0: the first point starts a leaf
+    for t in range(n):                # without branches
         kk = packed[t] >> nb
-        if t == 0 or kk != prev:
-            m += 1
-            prev = kk
+        m += kk != prev
+        prev = kk
         inv[packed[t] & mask] = m - 1
-    sums = np.zeros((m, 3))
-    cnt = np.zeros(m, np.int64)
+    sums = np.zeros((m, 4))           # per leaf: the sums of x, y, z and the count (exact)
     has = labels.shape[0] > 0
     maj = np.empty(m if has else 0, np.int64)
     mixed = np.zeros(m if has else 0, np.bool_)
@@ -121,7 +119,7 @@ def _group_packed(points, labels, packed, nb, num_labels):  # pragma: no cover -
         sums[g, 0] += points[i, 0]
         sums[g, 1] += points[i, 1]
         sums[g, 2] += points[i, 2]
-        cnt[g] += 1
+        sums[g, 3] += 1.0
         if has:
             lab = labels[i]
             if maj[g] < 0:
@@ -131,7 +129,7 @@ def _group_packed(points, labels, packed, nb, num_labels):  # pragma: no cover -
                 n_mixed += 1
     cen = np.empty((m, 3))
     for g in range(m):
-        c = np.float64(cnt[g])
+        c = sums[g, 3]
         cen[g, 0] = sums[g, 0] / c
         cen[g, 1] = sums[g, 1] / c
         cen[g, 2] = sums[g, 2] / c
@@ -140,7 +138,7 @@ def _group_packed(points, labels, packed, nb, num_labels):  # pragma: no cover -
         t = 0
         g = 0
         while t < n:
-            j = t + cnt[g]
+            j = t + np.int64(sums[g, 3])
             if mixed[g]:
                 best = -1
                 bestc = 0
@@ -419,8 +417,8 @@ def _scan_evidence(points, labels, base, order, t0, t1, x0, x1, codes, lo, dims,
     L = min(max(span, 1), w)
     w3 = w * w * w
     cand_d2 = np.empty(w3)            # the point's pairs within ell: squared distance, ring
-    cand_r = np.empty(w3, np.int64)   # index, voxel (x, y, z)
-    cand_v = np.empty((w3, 3), np.int64)
+    cand_r = np.empty(w3, np.int64)   # index, offset (a << 42 | b << 21 | c)
+    cand_o = np.empty(w3, np.int64)
     prev_x = np.int64(-(1 << 62))
     for t in range(t0, t1):
         i = order[t]
@@ -444,9 +442,7 @@ def _scan_evidence(points, labels, base, order, t0, t1, x0, x1, codes, lo, dims,
             if bx >= x0 and bx < x1:
                 cand_d2[0] = 0.0
                 cand_r[0] = ((bx - lo[0]) & smask) * s1 + (by - lo[1]) * d2z + (bz - lo[2])
-                cand_v[0, 0] = bx
-                cand_v[0, 1] = by
-                cand_v[0, 2] = bz
+                cand_o[0] = (R << 42) | (R << 21) | R
                 m = 1
         else:
             px, py, pz = points[i, 0], points[i, 1], points[i, 2]
@@ -496,18 +492,17 @@ def _scan_evidence(points, labels, base, order, t0, t1, x0, x1, codes, lo, dims,
                         d2 = sxy + sq[2, cz]
                         cand_d2[m] = d2
                         cand_r[m] = rxy + vz
-                        cand_v[m, 0] = vx
-                        cand_v[m, 1] = vy
-                        cand_v[m, 2] = vz
+                        cand_o[m] = (a << 42) | (b << 21) | cz
                         m += (d2 < ell2) and inx
         for j in range(m):
             k = 1.0 if counting else _kernel(cand_d2[j], scale, sf2, table)
             ridx = cand_r[j]
             v = ring[ridx]
             if v < 0:    # the voxel's first pair of this scan (its block's, maybe)
-                vx = cand_v[j, 0]
-                vy = cand_v[j, 1]
-                vz = cand_v[j, 2]
+                o = cand_o[j]
+                vx = bx + (o >> 42) - R
+                vy = by + ((o >> 21) & 2097151) - R
+                vz = bz + (o & 2097151) - R
                 bc = (((vx >> 2) - blo0) * bd1 + ((vy >> 2) - blo1)) * bd2 + ((vz >> 2) - blo2)
                 lb = blk[bc]
                 if lb < 0:
