@@ -727,6 +727,10 @@ def _pose_pass(c0, c1, cells, poses, nn, ranges, cls_hit, srt, key, seg_start, s
     and along a row of cells the count of the pose's bearings below the cell's bearing (from
     which the nearest beam follows) is found by stepping from the previous cell's count; the
     steps end where ``sbearing[pos - 1] < phi <= sbearing[pos]``, the count the bin table gives.
+    Discrete models skip the lookup for cells whose fast bearing lies farther than 2 EPS beyond
+    the pose's beams widened by half a beam width (behind a laser that does not see all
+    around): the exact bearing lies beyond them too, so no beam is within half a width and
+    the pair adds nothing (it is counted as a pair decided by the fast bearing).
     """
     n_per = nn.shape[1]
     n_poses = poses.shape[0]
@@ -772,6 +776,9 @@ def _pose_pass(c0, c1, cells, poses, nn, ranges, cls_hit, srt, key, seg_start, s
         lo_t = bmin[t] - wb2
         hi_t = bmax[t] + wb2
         wraps = (lo_t <= -PI + 1e-9) or (hi_t >= PI - 1e-9)
+        behind = not continuous and not wraps
+        lo_out = lo_t - 1e-9 - 2.0 * EPS
+        hi_out = hi_t + 1e-9 + 2.0 * EPS
         st = seg_start[t]
         n = seg_len[t]
         ppos = 0
@@ -797,6 +804,10 @@ def _pose_pass(c0, c1, cells, poses, nn, ranges, cls_hit, srt, key, seg_start, s
             sure = False
             if not dn:
                 pa = pa_s[e - e0] if simd else _wrap(_atan2_fast(dy, dx) - h)
+                if behind and (pa < lo_out or pa > hi_out) and abs(pa) < PI - EPS:
+                    n_pairs += 1  # beyond every beam's width, by more than EPS: no count
+                    n_fast += 1
+                    continue
                 if abs(pa) < PI - EPS:
                     if ci == pci + 1:  # the next cell of a row: step from its count
                         pos = ppos
