@@ -199,8 +199,9 @@ def phase_times(cfg, scans, method: str, repeat: int):
             labels = np.concatenate([lab, np.zeros(len(free), np.int64)])
             base, bmin, bmax = C.bases(pts, vmap.resolution)
             lo, dims = bmin - R, bmax + R - (bmin - R) + 1
-            codes = C._codes(base, lo, dims)
-            order, _ = C.stable_order(codes, int(np.prod(dims)) - 1)
+            if method == "sbki":    # S-CSM sums whole numbers: no voxel order
+                codes = C._codes(base, lo, dims)
+                order, _ = C.stable_order(codes, int(np.prod(dims)) - 1)
             t = lap("voxel order", t)
             n_pairs = max(1, len(pts) * (2 * R + 1) ** 3)
             n_vox = min(n_pairs, int(np.prod(dims)))
@@ -208,10 +209,15 @@ def phase_times(cfg, scans, method: str, repeat: int):
             scratch = C._scratch(vmap._scratch, 0, n_vox, n_vox, 0 if dense_k else n_pairs,
                                  dense_k)
             t = time.perf_counter()
-            part = C._scan_evidence(pts, labels, base, order, 0, len(pts), lo[0], lo[0] + dims[0],
-                                    codes, lo, dims, R, vmap.resolution, vmap.ell ** 2,
-                                    C._PIECES / vmap.ell, vmap.sf2, C._pieces(), method == "scsm",
-                                    dense_k, C.window_span(R, vmap.resolution, vmap.ell), *scratch)
+            if method == "sbki":
+                part = C._scan_evidence(pts, labels, base, order, 0, len(pts), lo[0],
+                                        lo[0] + dims[0], codes, lo, dims, R, vmap.resolution,
+                                        vmap.ell ** 2, C._PIECES / vmap.ell, vmap.sf2, C._pieces(),
+                                        False, dense_k, C.window_span(R, vmap.resolution, vmap.ell),
+                                        *scratch)
+            else:
+                part = C._count_evidence(labels, base, lo[0], lo[0] + dims[0], lo, dims, dense_k,
+                                         *scratch)
             t = lap("kernel sums", t)
             blk, vloc = part[0], part[1]
             blo = lo >> _SHIFT

@@ -21,12 +21,14 @@ def test_downsample_equals_numpy(spread, labelled):
 
 
 @pytest.mark.parametrize("method, res, ell, K", [("sbki", 0.3, 0.3, 20), ("sbki", 0.1, 0.3, 4),
-                                                 ("sbki", 0.2, 0.5, 6), ("scsm", 0.1, 0.3, 3)])
+                                                 ("sbki", 0.2, 0.5, 6), ("scsm", 0.1, 0.3, 3),
+                                                 ("scsm", 0.3, 0.3, 20)])
 @pytest.mark.parametrize("span", [None, 1])
 def test_point_windows_equal_numpy(monkeypatch, method, res, ell, K, span):
     """The kernel sums point by point over each axis's window of reachable offsets; with a
     window of 1 (every point then has more offsets within ell: the whole neighbourhood) the same
-    map as with the natural window and as the numpy engine."""
+    map as with the natural window and as the numpy engine. S-CSM (its counts in input order,
+    no voxel order) with few classes (dense sums) and many (the sparse list)."""
     from hw4.bki import VoxelMap
     if span is not None:
         monkeypatch.setattr(compiled, "window_span", lambda R, r, e: span)
@@ -56,3 +58,20 @@ def test_pool_grows_in_place_or_by_a_copy_when_viewed():
         b.update(pts, lab)
     assert all(np.array_equal(x, y) for x, y in zip(a.evidence(), b.evidence()))
     assert len(b.count) > 1024 and all(v.shape == (3, 8) for v in views)
+
+
+@pytest.mark.parametrize("threads", [1, 2, 3])
+def test_scsm_counts_in_input_order_on_threads(threads):
+    """S-CSM's counts (input order, per thread an x range) give the numpy map and the same pool."""
+    from hw4.bki import VoxelMap
+    rng = np.random.default_rng(2)
+    a = VoxelMap(0.2, 20, "scsm", engine="numpy")
+    b = VoxelMap(0.2, 20, "scsm", threads=threads)
+    c = VoxelMap(0.2, 20, "scsm", threads=1)
+    for n in (4000, 3000):
+        pts = rng.normal(0, 2.0, (n, 3))
+        lab = rng.integers(0, 3, n) * 7          # few classes per voxel, some mixed
+        for m in (a, b, c):
+            m.update(pts, lab)
+    assert all(np.array_equal(x, y) for x, y in zip(a.evidence(), b.evidence()))
+    assert np.array_equal(b.ev[:b.n_voxels], c.ev[:c.n_voxels])

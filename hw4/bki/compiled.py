@@ -25,7 +25,8 @@ same bit for bit (the tests compare the two engines):
   ``_accumulate`` adds the sums to the map's evidence. Adding a
   scan's sum first and the map's value after is the order of the numpy engine
   (``ev[slot] += add``). The same path serves every reach (the toy scans: up to 6^3 of the 7^3
-  offsets per point).
+  offsets per point). S-CSM (:func:`_count_evidence`) adds whole numbers, exact in any order:
+  its points are counted in input order (no voxel order), each voxel found through its block.
 
 New voxels take pool slots in (block key, voxel in block) order here (the numpy engine: raveled
 voxel order of the scan's box); the pool's row order is internal, :meth:`VoxelMap.evidence` and
@@ -548,6 +549,70 @@ def _scan_evidence(points, labels, base, order, t0, t1, x0, x1, codes, lo, dims,
 
 
 @njit(cache=True, nogil=True)
+def _count_evidence(labels, base, x0, x1, lo, dims, dense_k, vloc, vcnt, c0, w0, more, acc, ecls,
+                    evalue, enext):  # pragma: no cover - compiled
+    """S-CSM's per-scan evidence in the sparse form of :func:`_scan_evidence` (same scratch, same
+    returns): every point adds 1 to its own voxel's count and its class's sum, in input order (the
+    sums are whole numbers, exact in any order: no voxel order needed). A voxel's local index is
+    found through its block (the scan's box of blocks, then the 64 voxels of the block). Only
+    voxels with x index in ``[x0, x1)`` (a thread's share)."""
+    blo0, blo1, blo2 = lo[0] >> 2, lo[1] >> 2, lo[2] >> 2
+    bd0 = ((lo[0] + dims[0] - 1) >> 2) - blo0 + 1
+    bd1 = ((lo[1] + dims[1] - 1) >> 2) - blo1 + 1
+    bd2 = ((lo[2] + dims[2] - 1) >> 2) - blo2 + 1
+    blk = np.full(bd0 * bd1 * bd2, -1, np.int32)
+    nb = 0
+    nv = 0
+    ne = 0
+    for i in range(base.shape[0]):
+        vx, vy, vz = base[i, 0], base[i, 1], base[i, 2]
+        if vx < x0 or vx >= x1:
+            continue
+        c = labels[i]
+        bc = (((vx >> 2) - blo0) * bd1 + ((vy >> 2) - blo1)) * bd2 + ((vz >> 2) - blo2)
+        lb = blk[bc]
+        if lb < 0:
+            lb = nb
+            blk[bc] = lb
+            for h in range(lb * 64, lb * 64 + 64):
+                vloc[h] = -1
+            nb += 1
+        q = lb * 64 + (((vx & 3) << 4) | ((vy & 3) << 2) | (vz & 3))
+        v = vloc[q]
+        if v < 0:
+            v = nv
+            vloc[q] = v
+            vcnt[v] = 0
+            c0[v] = c
+            w0[v] = 0.0
+            more[v] = -1
+            for cq in range(dense_k):
+                acc[v * dense_k + cq] = 0.0
+            nv += 1
+        vcnt[v] += 1
+        if dense_k:
+            acc[v * dense_k + c] += 1.0
+            continue
+        if c0[v] == c:
+            w0[v] += 1.0
+            continue
+        e = more[v]
+        while e >= 0 and ecls[e] != c:
+            e = enext[e]
+        if e < 0:
+            e = ne
+            ecls[e] = c
+            evalue[e] = 0.0
+            enext[e] = more[v]
+            more[v] = e
+            ne += 1
+        evalue[e] += 1.0
+    nc = 0 if dense_k else nv
+    return (blk, vloc[:nb * 64], vcnt[:nv], c0[:nc], w0[:nc], more[:nc], ecls[:ne], evalue[:ne],
+            enext[:ne], acc[:nv * dense_k])
+
+
+@njit(cache=True, nogil=True)
 def _assign(table, rows, lbs, vloc, n_local, n_voxels):  # pragma: no cover - compiled
     """Pool slot of every touched voxel (local blocks ``lbs`` at map rows ``rows``, ``n_local``
     local voxels): the voxels without one take the next slots in (block key, voxel) order, set
@@ -736,23 +801,31 @@ def scan_evidence(points, labels, base, lo, dims, R: int, resolution: float, ell
     of parts, one per thread, whose blocks follow each other in key order (x slabs of blocks).
     ``scratch``: a list the caller keeps from scan to scan (the parts are views of it, valid until
     the next call with it); by default new arrays."""
-    global _pool
     lo = np.ascontiguousarray(lo, dtype=np.int64)
     dims = np.ascontiguousarray(dims, dtype=np.int64)
-    codes = _codes(base, lo, dims)
     n_box = int(np.prod(dims))
-    order, scodes = stable_order(codes, n_box - 1)
     n_threads = threads() if n_threads is None else max(1, int(n_threads))
+    dense_k = int(num_class) if 0 < num_class <= DENSE_CLASSES else 0
+    n_blk = int(np.prod(((lo + dims - 1) >> 2) - (lo >> 2) + 1))
+    store = [] if scratch is None else scratch
+    if counting:      # S-CSM: whole-number sums, the points in input order
+        bx = base[:, 0]
+        cuts = np.unique(np.quantile(bx, np.arange(1, n_threads) / n_threads).astype(np.int64) >> 2) << 2
+        edges = [int(lo[0])] + [int(c) for c in cuts if lo[0] < c < lo[0] + dims[0]] + [int(lo[0] + dims[0])]
+        n_vox = max(1, min(len(base), n_box))
+        jobs = [(labels, base, x0, x1, lo, dims, dense_k)
+                + _scratch(store, j, n_vox, min(n_vox, n_blk), 0 if dense_k else n_vox, dense_k)
+                for j, (x0, x1) in enumerate(zip(edges[:-1], edges[1:]))]
+        return _run(_count_evidence, jobs)
+    codes = _codes(base, lo, dims)
+    order, scodes = stable_order(codes, n_box - 1)
     # x ranges of whole blocks, cut at the points' quantiles: [x_0, x_1), [x_1, x_2), ...
     bx = lo[0] + scodes // (dims[1] * dims[2])          # voxel x of the sorted points
     cuts = np.unique(np.quantile(bx, np.arange(1, n_threads) / n_threads).astype(np.int64) >> 2) << 2
     edges = [int(lo[0])] + [int(c) for c in cuts if lo[0] < c < lo[0] + dims[0]] + [int(lo[0] + dims[0])]
-    dense_k = int(num_class) if 0 < num_class <= DENSE_CLASSES else 0
     const = (codes, lo, dims, int(R), float(resolution), float(ell) ** 2, _PIECES / float(ell),
              float(sf2), _pieces(), bool(counting), dense_k, window_span(R, resolution, ell))
-    n_blk = int(np.prod(((lo + dims - 1) >> 2) - (lo >> 2) + 1))
     w3 = (2 * int(R) + 1) ** 3
-    store = [] if scratch is None else scratch
     jobs = []
     for j, (x0, x1) in enumerate(zip(edges[:-1], edges[1:])):
         t0 = int(np.searchsorted(bx, x0 - R, "left"))   # the points within R voxels of the range
@@ -762,13 +835,19 @@ def scan_evidence(points, labels, base, lo, dims, R: int, resolution: float, ell
         jobs.append((points, labels, base, order, t0, t1, x0, x1) + const
                     + _scratch(store, j, n_vox, min(n_vox, n_blk), 0 if dense_k else n_pairs,
                                dense_k))
+    return _run(_scan_evidence, jobs)
+
+
+def _run(kernel, jobs):
+    """``kernel(*job)`` for every job: in this thread when there is one, else on the pool."""
+    global _pool
     if len(jobs) == 1:
-        return [_scan_evidence(*jobs[0])]
+        return [kernel(*jobs[0])]
     if _pool is None or _pool._max_workers < len(jobs):
         from concurrent.futures import ThreadPoolExecutor
         _pool = ThreadPoolExecutor(len(jobs))
-    return list(_pool.map(lambda a: _scan_evidence(*a), jobs))
+    return list(_pool.map(lambda a: kernel(*a), jobs))
 
 
 KERNELS = (_kernel, _leaf_keys, _group_packed, _lengths, _free_samples, _free_leaves, _bases, _codes, _scan_evidence,
-           _assign, _accumulate)
+           _count_evidence, _assign, _accumulate)
