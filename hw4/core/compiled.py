@@ -730,7 +730,11 @@ def _pose_pass(c0, c1, cells, poses, nn, ranges, cls_hit, srt, key, seg_start, s
     Discrete models skip the lookup for cells whose fast bearing lies farther than 2 EPS beyond
     the pose's beams widened by half a beam width (behind a laser that does not see all
     around): the exact bearing lies beyond them too, so no beam is within half a width and
-    the pair adds nothing (it is counted as a pair decided by the fast bearing).
+    the pair adds nothing (it is counted as a pair decided by the fast bearing). Continuous
+    models skip it there when even the nearest beam's line passes farther than l from the
+    cell: the angle to the nearest beam is at least d, the fast bearing's distance to the
+    pose's first or last beam less 2 EPS, so the gap r sin(diff) (or r) is at least
+    r (d - d^3 / 6) for d <= pi / 2; beyond l by the margin of :func:`_beam_gap`, no sums.
     """
     n_per = nn.shape[1]
     n_poses = poses.shape[0]
@@ -776,7 +780,9 @@ def _pose_pass(c0, c1, cells, poses, nn, ranges, cls_hit, srt, key, seg_start, s
         lo_t = bmin[t] - wb2
         hi_t = bmax[t] + wb2
         wraps = (lo_t <= -PI + 1e-9) or (hi_t >= PI - 1e-9)
-        behind = not continuous and not wraps
+        behind = not wraps
+        bmin_t = bmin[t]
+        bmax_t = bmax[t]
         lo_out = lo_t - 1e-9 - 2.0 * EPS
         hi_out = hi_t + 1e-9 + 2.0 * EPS
         st = seg_start[t]
@@ -805,9 +811,20 @@ def _pose_pass(c0, c1, cells, poses, nn, ranges, cls_hit, srt, key, seg_start, s
             if not dn:
                 pa = pa_s[e - e0] if simd else _wrap(_atan2_fast(dy, dx) - h)
                 if behind and (pa < lo_out or pa > hi_out) and abs(pa) < PI - EPS:
-                    n_pairs += 1  # beyond every beam's width, by more than EPS: no count
-                    n_fast += 1
-                    continue
+                    if not continuous:
+                        n_pairs += 1  # beyond every beam's width, by more than EPS: no count
+                        n_fast += 1
+                        continue
+                    if pa > hi_out:
+                        dlt = min(pa - bmax_t, (bmin_t + TWO_PI) - pa)
+                    else:
+                        dlt = min(bmin_t - pa, pa - (bmax_t - TWO_PI))
+                    dlt = min(dlt - 2.0 * EPS - 1e-12, PI / 2)
+                    if dlt > 0.0 and (r * (dlt - dlt * dlt * dlt / 6.0) * (1.0 - 1e-12)
+                                      > lim + 2.0 * (r * EPS + 1e-12) + 1e-9):
+                        n_pairs += 1  # every beam's line passes farther than l: no sums
+                        n_fast += 1
+                        continue
                 if abs(pa) < PI - EPS:
                     if ci == pci + 1:  # the next cell of a row: step from its count
                         pos = ppos
