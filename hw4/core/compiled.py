@@ -7,12 +7,13 @@ the same pairs, the same nearest beam and the same sums:
 
 * :func:`nearest_poses` is the exact k-nearest-pose query (squared distances ``dx dx + dy dy``
   as scipy's KD-tree computes them, sorted by distance) over tiles of cells sharing one sorted
-  candidate list, each cell's k + 1 nearest placed by their ranks among its candidates
-  (:func:`_rank_select`, a vectorised count); cells whose ranking has a tie (two poses at the
-  same distance) are flagged and answered by scipy's KD-tree itself, so the poses and their
-  order are always the KD-tree's.
+  candidate list (the tile's bound from a selection, ``np.partition``, over one vectorised
+  loop of distances; candidates kept by a compaction without branches), each cell's k + 1
+  nearest placed by their ranks among its candidates (:func:`_rank_select`, a vectorised
+  count); cells whose ranking has a tie (two poses at the same distance) are flagged and
+  answered by scipy's KD-tree itself, so the poses and their order are always the KD-tree's.
 * :func:`bin_table` builds the per-pose bin table of :class:`hw4.core.sensor.BeamTable` in one
-  pass (the same arrays as its numpy form).
+  pass over the bearings, each bearing's bin computed once (the same arrays as its numpy form).
 * :func:`cell_evidence` evaluates, per (cell, pose) pair: range, wrapped bearing (``np.remainder``
   as numpy computes it), the perceptual field, the nearest beam from the same sorted bearing
   index (:class:`hw4.core.sensor.BeamTable`; the beams' ranges, classes and directions are read
@@ -20,7 +21,13 @@ the same pairs, the same nearest beam and the same sums:
   nearest poses it visits the pairs pose by pose (:func:`_pose_pass`: one pose's bearing index
   stays in the cache, and its cells' ranges and fast bearings come from one vectorised loop,
   :func:`_bearings_simd`); the discrete counts are whole numbers, so their order does not
-  matter, and the continuous sums are then formed cell by cell (:func:`_kernel_pass`).
+  matter, and the continuous sums are then formed cell by cell (:func:`_kernel_pass`). The
+  nearest of a bearing's two neighbours is chosen without branches (:func:`_nearest_at`: the
+  wrap's shifts as multiples of 2 pi, the choice as index arithmetic); cells behind the laser,
+  beyond every beam's width (discrete) or farther than l from every beam's line (continuous,
+  bounded without the sine), skip the lookup, and the continuous gap test skips the sine
+  where bounds decide (:func:`_beam_gap`); every shortcut keeps a margin of at least 2 EPS or
+  1e-9 m, so its outcome is the exact one.
   Sums per cell are formed in the numpy path's order (end points per class over the cell's
   poses, then the free samples offset by offset), so the map does not depend on how cells are
   split among threads.
