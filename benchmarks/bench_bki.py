@@ -200,8 +200,7 @@ def phase_times(cfg, scans, method: str, repeat: int):
             base, bmin, bmax = C.bases(pts, vmap.resolution)
             lo, dims = bmin - R, bmax + R - (bmin - R) + 1
             if method == "sbki":    # S-CSM sums whole numbers: no voxel order
-                codes = C._codes(base, lo, dims)
-                order, _ = C.stable_order(codes, int(np.prod(dims)) - 1)
+                order, omask, _ = C.voxel_order(base, lo, dims)
             t = lap("voxel order", t)
             n_pairs = max(1, len(pts) * (2 * R + 1) ** 3)
             n_vox = min(n_pairs, int(np.prod(dims)))
@@ -210,8 +209,8 @@ def phase_times(cfg, scans, method: str, repeat: int):
                                  dense_k)
             t = time.perf_counter()
             if method == "sbki":
-                part = C._scan_evidence(pts, labels, base, order, 0, len(pts), lo[0],
-                                        lo[0] + dims[0], codes, lo, dims, R, vmap.resolution,
+                part = C._scan_evidence(pts, labels, base, order, omask, 0, len(pts), lo[0],
+                                        lo[0] + dims[0], lo, dims, R, vmap.resolution,
                                         vmap.ell ** 2, C._PIECES / vmap.ell, vmap.sf2, C._pieces(),
                                         False, dense_k, C.window_span(R, vmap.resolution, vmap.ell),
                                         *scratch)

@@ -75,3 +75,18 @@ def test_scsm_counts_in_input_order_on_threads(threads):
             m.update(pts, lab)
     assert all(np.array_equal(x, y) for x, y in zip(a.evidence(), b.evidence()))
     assert np.array_equal(b.ev[:b.n_voxels], c.ev[:c.n_voxels])
+
+
+def test_voxel_order_is_stable_and_falls_back_to_argsort():
+    """The sorted ``code << nb | index`` gives the stable argsort of the voxel codes; a box whose
+    codes leave no room for the index takes the argsort itself."""
+    rng = np.random.default_rng(4)
+    base = rng.integers(-20, 20, (5000, 3))
+    lo, dims = base.min(axis=0), np.ptp(base, axis=0) + 1
+    codes = ((base - lo) * np.array([dims[1] * dims[2], dims[2], 1])).sum(axis=1)
+    okeys, omask, nb = compiled.voxel_order(base, lo, dims)
+    assert nb > 0 and np.array_equal(okeys & omask, np.argsort(codes, kind="stable"))
+    wide = np.array([1 << 20, 1 << 20, 1 << 21])      # 2^61 voxels: no room for the index
+    okeys, omask, nb = compiled.voxel_order(base, lo, wide)
+    wcodes = ((base - lo) * np.array([wide[1] * wide[2], wide[2], 1])).sum(axis=1)
+    assert nb == 0 and np.array_equal(okeys & omask, np.argsort(wcodes, kind="stable"))

@@ -327,13 +327,15 @@ def _bases(points, res):  # pragma: no cover - compiled
 
 
 @njit(cache=True, nogil=True)
-def _codes(base, lo, dims):  # pragma: no cover - compiled
-    """Raveled index of each point's voxel in the scan's box (origin ``lo``, shape ``dims``)."""
+def _codes(base, lo, dims, nb):  # pragma: no cover - compiled
+    """Raveled index of each point's voxel in the scan's box (origin ``lo``, shape ``dims``),
+    shifted left by ``nb`` bits with the point's index below (``nb`` = 0: the codes alone)."""
     n = base.shape[0]
     s1 = dims[1] * dims[2]
     codes = np.empty(n, np.int64)
     for i in range(n):
-        codes[i] = (base[i, 0] - lo[0]) * s1 + (base[i, 1] - lo[1]) * dims[2] + (base[i, 2] - lo[2])
+        c = (base[i, 0] - lo[0]) * s1 + (base[i, 1] - lo[1]) * dims[2] + (base[i, 2] - lo[2])
+        codes[i] = (c << nb) | (i if nb else 0)
     return codes
 
 
@@ -361,11 +363,12 @@ def _kernel(d2, scale, sf2, table):  # pragma: no cover - compiled
 
 
 @njit(cache=True, nogil=True)
-def _scan_evidence(points, labels, base, order, t0, t1, x0, x1, codes, lo, dims, R, res, ell2,
+def _scan_evidence(points, labels, base, order, omask, t0, t1, x0, x1, lo, dims, R, res, ell2,
                    scale, sf2, table, counting, dense_k, span, vloc, vcnt, c0, w0, more, acc,
                    ecls, evalue, enext):  # pragma: no cover - compiled
-    """Per-scan evidence in a sparse form. The points ``order[t0:t1]`` (raveled voxel order,
-    stable) are taken one by one, and each point's pairs in lexicographic offset order: per
+    """Per-scan evidence in a sparse form. The points ``order[t0:t1] & omask`` (raveled voxel
+    order, stable: the sorted ``code << nb | index`` masked, or a stable argsort with ``omask``
+    all ones) are taken one by one, and each point's pairs in lexicographic offset order: per
     (voxel, class) the weights are summed from 0 in the points' order, as
     :func:`hw4.bki.kernel_sums.kernel_sums` sums them. ``counting`` (S-CSM): every point adds 1
     to its own voxel (``R`` = 0). Only voxels with x index in ``[x0, x1)`` are summed (a
@@ -422,7 +425,7 @@ def _scan_evidence(points, labels, base, order, t0, t1, x0, x1, codes, lo, dims,
     cand_o = np.empty(w3, np.int64)
     prev_x = np.int64(-(1 << 62))
     for t in range(t0, t1):
-        i = order[t]
+        i = order[t] & omask
         bx, by, bz = base[i, 0], base[i, 1], base[i, 2]
         c = labels[i]
         if bx != prev_x:              # the slabs within R of this x: their slots
@@ -494,7 +497,7 @@ def _scan_evidence(points, labels, base, order, t0, t1, x0, x1, codes, lo, dims,
                         cand_d2[m] = d2
                         cand_r[m] = rxy + vz
                         cand_o[m] = (a << 42) | (b << 21) | cz
-                        m += (d2 < ell2) and inx
+                        m += (d2 < ell2) & inx
         for j in range(m):
             k = 1.0 if counting else _kernel(cand_d2[j], scale, sf2, table)
             ridx = cand_r[j]
@@ -733,6 +736,20 @@ def _announce() -> None:
           file=sys.stderr, flush=True)
 
 
+def voxel_order(base, lo, dims):
+    """The points in raveled voxel order of the box (origin ``lo``, shape ``dims``), stable:
+    ``(okeys, omask, nb)`` with the point indices ``okeys & omask`` in that order; ``okeys`` the
+    sorted ``code << nb | index`` when both fit in 63 bits (one ``np.sort``), else a stable
+    argsort (``omask`` all ones, ``nb`` = 0)."""
+    n = len(base)
+    nb = max(1, int(n - 1).bit_length())
+    if int(np.prod(dims) - 1).bit_length() + nb <= 63:
+        okeys = _codes(base, lo, dims, nb)
+        okeys.sort()
+        return okeys, (1 << nb) - 1, nb
+    return np.argsort(_codes(base, lo, dims, 0), kind="stable"), -1, 0
+
+
 def stable_order(keys: np.ndarray, top: int):
     """Stable ascending order of int64 ``keys`` in ``[0, top]`` and the keys in that order: one
     ``np.sort`` of the keys with the index packed below them when both fit in 63 bits, else a
@@ -817,22 +834,25 @@ def scan_evidence(points, labels, base, lo, dims, R: int, resolution: float, ell
                 + _scratch(store, j, n_vox, min(n_vox, n_blk), 0 if dense_k else n_vox, dense_k)
                 for j, (x0, x1) in enumerate(zip(edges[:-1], edges[1:]))]
         return _run(_count_evidence, jobs)
-    codes = _codes(base, lo, dims)
-    order, scodes = stable_order(codes, n_box - 1)
-    # x ranges of whole blocks, cut at the points' quantiles: [x_0, x_1), [x_1, x_2), ...
-    bx = lo[0] + scodes // (dims[1] * dims[2])          # voxel x of the sorted points
-    cuts = np.unique(np.quantile(bx, np.arange(1, n_threads) / n_threads).astype(np.int64) >> 2) << 2
-    edges = [int(lo[0])] + [int(c) for c in cuts if lo[0] < c < lo[0] + dims[0]] + [int(lo[0] + dims[0])]
-    const = (codes, lo, dims, int(R), float(resolution), float(ell) ** 2, _PIECES / float(ell),
+    order, omask, nb = voxel_order(base, lo, dims)
+    edges = [int(lo[0]), int(lo[0] + dims[0])]
+    if n_threads > 1:   # x ranges of whole blocks, cut at the points' quantiles
+        scodes = order >> nb if nb else _codes(base, lo, dims, 0)[order]
+        bx = lo[0] + scodes // (dims[1] * dims[2])          # voxel x of the sorted points
+        cuts = np.unique(np.quantile(bx, np.arange(1, n_threads) / n_threads).astype(np.int64) >> 2) << 2
+        edges = edges[:1] + [int(c) for c in cuts if lo[0] < c < lo[0] + dims[0]] + edges[1:]
+    const = (lo, dims, int(R), float(resolution), float(ell) ** 2, _PIECES / float(ell),
              float(sf2), _pieces(), bool(counting), dense_k, window_span(R, resolution, ell))
     w3 = (2 * int(R) + 1) ** 3
     jobs = []
     for j, (x0, x1) in enumerate(zip(edges[:-1], edges[1:])):
-        t0 = int(np.searchsorted(bx, x0 - R, "left"))   # the points within R voxels of the range
-        t1 = int(np.searchsorted(bx, x1 + R - 1, "right"))
+        t0, t1 = 0, len(order)
+        if len(edges) > 2:      # the points within R voxels of the range
+            t0 = int(np.searchsorted(bx, x0 - R, "left"))
+            t1 = int(np.searchsorted(bx, x1 + R - 1, "right"))
         n_pairs = max(1, (t1 - t0) * w3)                # pairs the job can make, at most
         n_vox = min(n_pairs, n_box)                       # voxels it can touch
-        jobs.append((points, labels, base, order, t0, t1, x0, x1) + const
+        jobs.append((points, labels, base, order, omask, t0, t1, x0, x1) + const
                     + _scratch(store, j, n_vox, min(n_vox, n_blk), 0 if dense_k else n_pairs,
                                dense_k))
     return _run(_scan_evidence, jobs)
