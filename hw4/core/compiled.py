@@ -1006,7 +1006,8 @@ def _poses_kernel(row0, row1, gx, gy, poses, reach, ranges, cls_hit, srt, key,
     each pair exactly as :func:`_cells_kernel` (a cell meets its poses in index order, the order
     of the cell-by-cell path), the continuous sums kept per cell in ``s_end`` (n_cells, K) and
     ``s_off`` (n_cells, n_off) and added to ``acc`` at the end in the same order. Keeping one
-    pose's beam index hot in the cache makes this several times faster than cell by cell."""
+    pose's beam index hot in the cache makes this several times faster than cell by cell.
+    Cells behind the laser skip the nearest-beam lookup as in :func:`_pose_pass`."""
     n_classes = acc.shape[1]
     free = n_classes - 1
     nx = gx.shape[0]
@@ -1029,6 +1030,11 @@ def _poses_kernel(row0, row1, gx, gy, poses, reach, ranges, cls_hit, srt, key,
         py = poses[t, 1]
         rt = reach[t]
         simd = abs(poses[t, 2]) <= PI and not dense[t]
+        bmin_t = bmin[t]
+        bmax_t = bmax[t]
+        behind = not ((bmin_t - wb2 <= -PI + 1e-9) or (bmax_t + wb2 >= PI - 1e-9))
+        lo_out = bmin_t - wb2 - 1e-9 - 2.0 * EPS
+        hi_out = bmax_t + wb2 + 1e-9 + 2.0 * EPS
         ix0 = max(0, int(math.floor((px - rt - gx[0]) / g)) - 1)
         ix1 = min(nx - 1, int(math.ceil((px + rt - gx[0]) / g)) + 1)
         iy0 = max(row0, int(math.floor((py - rt - gy[0]) / gyy)) - 1)
@@ -1057,6 +1063,21 @@ def _poses_kernel(row0, row1, gx, gy, poses, reach, ranges, cls_hit, srt, key,
                 sure = False
                 if not dense[t]:
                     pa = pa_s[ix - ix0] if simd else _wrap(_atan2_fast(dy, dx) - poses[t, 2])
+                    if behind and (pa < lo_out or pa > hi_out) and abs(pa) < PI - EPS:
+                        if not continuous:  # as in _pose_pass: beyond every beam's width
+                            n_pairs += 1
+                            n_fast += 1
+                            continue
+                        if pa > hi_out:
+                            dlt = min(pa - bmax_t, (bmin_t + TWO_PI) - pa)
+                        else:
+                            dlt = min(bmin_t - pa, pa - (bmax_t - TWO_PI))
+                        dlt = min(dlt - 2.0 * EPS - 1e-12, PI / 2)
+                        if dlt > 0.0 and (r * (dlt - dlt * dlt * dlt / 6.0) * (1.0 - 1e-12)
+                                          > lim + 2.0 * (r * EPS + 1e-12) + 1e-9):
+                            n_pairs += 1  # every beam's line passes farther than l
+                            n_fast += 1
+                            continue
                     if abs(pa) < PI - EPS:
                         if ix == pix + 1:  # the next cell of the row: step from its count
                             pos = ppos
