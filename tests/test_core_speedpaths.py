@@ -51,3 +51,73 @@ def test_beam_table_compiled_is_numpy(shuffle, rows):
                   "bearing_max"):
             assert np.array_equal(getattr(x, f), getattr(a, f)), f
     assert np.array_equal(b._bin_lo, a._bin_lo)
+
+
+def test_nearest_at_is_the_chain_of_ifs():
+    """compiled._nearest_at (branch-free) gives the position and difference of _nearest (bin
+    table, wrap by _wrap) for bearings anywhere, near beams and at the wrap."""
+    from hw4.core import compiled
+    from hw4.core.sensor import BINS
+    rng = np.random.default_rng(11)
+    scans = _scans(rng, n_poses=40, rows=2)
+    scans.append(np.array([[1.0, -1.0, 0.5], [0.0, 1e-17, -0.5]]))  # bearings 0, pi, -pi/4
+    t = BeamTable.from_scans(scans, compiled=True)
+    srt = t._sorted.astype(np.int64)
+    seg_start, seg_len = t._seg_start.astype(np.int64), t._seg_len.astype(np.int64)
+    sb = t._sorted_bearing
+    for p in range(len(scans)):
+        if t._dense[p]:
+            continue
+        beams = sb[seg_start[p]:seg_start[p] + seg_len[p]]
+        phis = np.concatenate([rng.uniform(-np.pi, np.pi, 300), beams, np.nextafter(beams, 9),
+                               np.nextafter(beams, -9), [-np.pi, np.pi, 0.0, -0.0]])
+        for phi in phis:
+            k, d, sure = compiled._nearest_fast(p, phi, srt, seg_start, seg_len, t._bin_lo, sb,
+                                                BINS / (2 * np.pi), BINS)
+            k2, d2 = compiled._nearest(p, phi, srt, t._key, seg_start, seg_len, t._bin_lo,
+                                       t._dense, sb, BINS / (2 * np.pi), BINS)
+            if sure:
+                assert (k, d) == (k2, d2)
+
+
+def test_beam_gap_is_the_sine_test():
+    from hw4.core import compiled
+    rng = np.random.default_rng(5)
+    lim = 0.2 + 1e-9
+    r = 10.0 ** rng.uniform(-3, 1.5, 200000)
+    diff = rng.uniform(0, np.pi / 2, 200000)
+    diff[:50000] = (lim / r[:50000]) * (1 + rng.uniform(-1e-6, 1e-6, 50000))  # at the threshold
+    diff[50000:60000] = np.arcsin(np.minimum(lim / r[50000:60000], 1.0))
+    diff = np.minimum(diff, np.nextafter(np.pi / 2, 0))
+    for a, b in zip(r, diff):
+        g = a * np.sin(b)
+        near, ok = compiled._beam_gap(a, b, lim)
+        assert near == (g < lim) and ok == (abs(g - lim) > a * compiled.EPS + 1e-12)
+
+
+@pytest.mark.parametrize("span", [np.pi / 2, np.pi, 1.9 * np.pi, 2 * np.pi])
+@pytest.mark.parametrize("model", ["discrete", "continuous"])
+@pytest.mark.parametrize("nearest", [16, None], ids=["nn16", "all"])
+def test_cells_behind_the_laser_agree_with_numpy(span, model, nearest):
+    """Lasers of narrow to full spans (the cells behind them skip the lookup): the compiled
+    map is the numpy engine's (discrete bit for bit, continuous to 1e-12 as elsewhere)."""
+    from hw4.core.evidence import count_evidence
+    from hw4.core.grid import Grid
+    rng = np.random.default_rng(int(span * 100) + (model == "discrete"))
+    n_poses, n_beams = 60, 90
+    poses = np.column_stack([rng.uniform(-4, 4, n_poses), rng.uniform(-4, 4, n_poses),
+                             rng.uniform(-np.pi, np.pi, n_poses)])
+    scans = []
+    for _ in range(n_poses):
+        ang = np.linspace(-span / 2, span / 2, n_beams, endpoint=span < 2 * np.pi)
+        z = rng.uniform(0.5, 6.0, n_beams)
+        scans.append(np.vstack([z * np.cos(ang), z * np.sin(ang)]))
+    grid = Grid(0.1, (-5.0, 5.0), (-5.0, 5.0))
+    kw = dict(model=model, nearest_poses=nearest, z_max=8.0)
+    a = count_evidence(grid, poses, scans, engine="compiled", **kw)
+    b = count_evidence(grid, poses, scans, engine="numpy", **kw)
+    assert b.sum() > 0
+    if model == "continuous":
+        np.testing.assert_allclose(a, b, rtol=1e-12, atol=0)
+    else:
+        np.testing.assert_array_equal(a, b)
