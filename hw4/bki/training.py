@@ -224,14 +224,14 @@ def _training_compiled(scan: Scan, ds_resolution: float, free_resolution: float,
     if far:
         raise _far(ds_resolution)
     origin = np.asarray(scan.origin, dtype=np.float64)
+    length = compiled.lengths(hits, origin)      # the ray lengths, computed once
     if max_range > 0:
-        keep = compiled.lengths(hits, origin) <= max_range
+        keep = length <= max_range
         if not keep.all():
-            hits, lab = hits[keep], lab[keep]
+            hits, lab, length = hits[keep], lab[keep], length[keep]
     if len(hits) == 0:
         return TrainingData(np.zeros((0, 3)), np.zeros(0, dtype=np.int64), 0, 0)
     _check_free_resolution(free_resolution)
-    length = compiled.lengths(hits, origin)
     _check_free_memory(length, free_resolution)
     free, far = compiled.free_leaves(hits, origin, length, free_resolution, ds_resolution)
     if far:
