@@ -175,7 +175,7 @@ def phase_times(cfg, scans, method: str, repeat: int):
     ``training_data`` and ``VoxelMap.update`` run them: best of ``repeat`` runs per phase, summed
     over the scans [s], the map they build and the (point, voxel) pairs."""
     from hw4.bki import compiled as C
-    from hw4.bki.voxelmap import _SHIFT, _pack, kernel_reach
+    from hw4.bki.voxelmap import kernel_reach
     best = {}
     for _ in range(repeat):
         vmap = VoxelMap(cfg.resolution, cfg.num_class, method, cfg.sf2, cfg.ell, cfg.prior,
@@ -219,12 +219,12 @@ def phase_times(cfg, scans, method: str, repeat: int):
                                          *scratch)
             t = lap("kernel sums", t)
             blk, vloc = part[0], part[1]
-            blo = lo >> _SHIFT
-            bdims = tuple(int(x) for x in ((lo + dims - 1) >> _SHIFT) - blo + 1)
-            ub = np.flatnonzero(blk >= 0)
-            rows = vmap._rows_for(_pack(np.column_stack(np.unravel_index(ub, bdims)) + blo))
+            rows, lbs, vmap.keys, vmap.slots, n_new = C._block_rows(blk, lo, dims, vmap.keys,
+                                                                    vmap.slots, vmap.n_blocks)
+            vmap._grow_table(vmap.n_blocks + n_new)
+            vmap.n_blocks += n_new
             t = lap("block rows", t)
-            slot_of, n_voxels = C._assign(vmap.table, rows, blk[ub], vloc, len(part[2]),
+            slot_of, n_voxels = C._assign(vmap.table, rows, lbs, vloc, len(part[2]),
                                           vmap.n_voxels)
             vmap._reserve(n_voxels - vmap.n_voxels)
             vmap.n_voxels = n_voxels

@@ -616,6 +616,70 @@ def _count_evidence(labels, base, x0, x1, lo, dims, dense_k, vloc, vcnt, c0, w0,
 
 
 @njit(cache=True, nogil=True)
+def _block_rows(blk, lo, dims, keys, slots, n_blocks):  # pragma: no cover - compiled
+    """Map rows of the scan's touched blocks (``blk >= 0`` over its box of 4^3-voxel blocks, in
+    raveled order = key order), new blocks taking rows ``n_blocks``, ``n_blocks + 1``, ... in key
+    order: ``(rows, lbs, keys, slots, n_new)`` with ``lbs`` the touched blocks' local indices and
+    ``keys`` / ``slots`` the map's sorted block keys and their rows with the new ones merged in
+    (the arrays given when there are none). Keys as :func:`hw4.bki.voxelmap._pack`."""
+    blo0, blo1, blo2 = lo[0] >> 2, lo[1] >> 2, lo[2] >> 2
+    bd1 = ((lo[1] + dims[1] - 1) >> 2) - blo1 + 1
+    bd2 = ((lo[2] + dims[2] - 1) >> 2) - blo2 + 1
+    n_t = 0
+    for bc in range(blk.shape[0]):
+        n_t += blk[bc] >= 0
+    tkeys = np.empty(n_t, np.int64)
+    rows = np.empty(n_t, np.int64)
+    lbs = np.empty(n_t, np.int32)
+    j = 0
+    for bc in range(blk.shape[0]):
+        if blk[bc] >= 0:
+            x = bc // (bd1 * bd2)
+            y = (bc // bd2) % bd1
+            z = bc % bd2
+            tkeys[j] = (((blo0 + x + _OFF) << 42) | ((blo1 + y + _OFF) << 21)
+                        | (blo2 + z + _OFF))
+            lbs[j] = blk[bc]
+            j += 1
+    n_new = 0
+    p = 0
+    nk = keys.shape[0]
+    for j in range(n_t):
+        tk = tkeys[j]
+        while p < nk and keys[p] < tk:
+            p += 1
+        if p < nk and keys[p] == tk:
+            rows[j] = slots[p]
+        else:
+            rows[j] = n_blocks + n_new
+            n_new += 1
+    if n_new == 0:
+        return rows, lbs, keys, slots, 0
+    mk = np.empty(nk + n_new, np.int64)
+    ms = np.empty(nk + n_new, np.int64)
+    p = 0
+    q = 0
+    for j in range(n_t):      # merge: the map's keys below each touched key, then it if new
+        tk = tkeys[j]
+        while p < nk and keys[p] < tk:
+            mk[q] = keys[p]
+            ms[q] = slots[p]
+            p += 1
+            q += 1
+        if p < nk and keys[p] == tk:
+            continue
+        mk[q] = tk
+        ms[q] = rows[j]
+        q += 1
+    while p < nk:
+        mk[q] = keys[p]
+        ms[q] = slots[p]
+        p += 1
+        q += 1
+    return rows, lbs, mk, ms, n_new
+
+
+@njit(cache=True, nogil=True)
 def _assign(table, rows, lbs, vloc, n_local, n_voxels):  # pragma: no cover - compiled
     """Pool slot of every touched voxel (local blocks ``lbs`` at map rows ``rows``, ``n_local``
     local voxels): the voxels without one take the next slots in (block key, voxel) order, set
@@ -870,4 +934,4 @@ def _run(kernel, jobs):
 
 
 KERNELS = (_kernel, _leaf_keys, _group_packed, _lengths, _free_samples, _free_leaves, _bases, _codes, _scan_evidence,
-           _count_evidence, _assign, _accumulate)
+           _count_evidence, _block_rows, _assign, _accumulate)

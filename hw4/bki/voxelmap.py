@@ -229,16 +229,18 @@ class VoxelMap:
     def _update_compiled(self, points, labels, base, lo, dims, R) -> None:
         """The compiled engine: the scan's sparse evidence (one part per thread, blocks of
         consecutive x slabs), then its merge into the pool, part after part (key order)."""
-        from .compiled import _accumulate, _assign, scan_evidence
+        from .compiled import _accumulate, _assign, _block_rows, scan_evidence
         parts = scan_evidence(np.ascontiguousarray(points), np.ascontiguousarray(labels), base, lo,
                               dims, R, self.resolution, self.ell, self.sf2, self.method == "scsm",
                               self.threads, self.num_class, self._scratch)
-        blo = lo >> _SHIFT
-        bdims = tuple(int(x) for x in ((lo + dims - 1) >> _SHIFT) - blo + 1)
+        lo = np.ascontiguousarray(lo, dtype=np.int64)
+        dims = np.ascontiguousarray(dims, dtype=np.int64)
         for blk, vloc, vcnt, c0, w0, more, ecls, evalue, enext, acc in parts:
-            ub = np.flatnonzero(blk >= 0)              # touched blocks in key order
-            lbs = blk[ub]
-            rows = self._rows_for(_pack(np.column_stack(np.unravel_index(ub, bdims)) + blo))
+            # touched blocks in key order, their rows (new blocks merged into keys / slots)
+            rows, lbs, self.keys, self.slots, n_new = _block_rows(blk, lo, dims, self.keys,
+                                                                  self.slots, self.n_blocks)
+            self._grow_table(self.n_blocks + n_new)
+            self.n_blocks += n_new
             if self.n_voxels + len(vcnt) >= np.iinfo(np.int32).max:   # near the limit: refuse
                 self._reserve(int(np.count_nonzero(  # before the table changes
                     (vloc.reshape(-1, B3)[lbs] >= 0) & (self.table[rows] < 0))))
@@ -322,6 +324,15 @@ class VoxelMap:
         self.ev[slots] += add
         self.count[slots] += cnt
 
+    def _grow_table(self, need: int) -> None:
+        """Room in the table for ``need`` blocks (grown by half its size at a time; new rows -1)."""
+        if need > len(self.table):
+            first = self.n_blocks
+            cap = max(need, len(self.table) + len(self.table) // 2)
+            grown = np.full((cap, B3), -1, np.int32)
+            grown[:first] = self.table[:first]
+            self.table = grown
+
     def _rows_for(self, tkeys: np.ndarray) -> np.ndarray:
         """Table rows of the sorted block keys ``tkeys``, allocating the new ones."""
         pos = np.searchsorted(self.keys, tkeys)
@@ -336,11 +347,7 @@ class VoxelMap:
             first = self.n_blocks
             rows[new] = np.arange(first, first + n_new)
             need = first + n_new
-            if need > len(self.table):
-                cap = max(need, len(self.table) + len(self.table) // 2)
-                grown = np.full((cap, B3), -1, np.int32)
-                grown[:first] = self.table[:first]
-                self.table = grown
+            self._grow_table(need)
             self.keys = np.insert(self.keys, pos[new], tkeys[new])
             self.slots = np.insert(self.slots, pos[new], rows[new])
             self.n_blocks = need
