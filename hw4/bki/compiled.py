@@ -890,9 +890,11 @@ def scan_evidence(points, labels, base, lo, dims, R: int, resolution: float, ell
     n_blk = int(np.prod(((lo + dims - 1) >> 2) - (lo >> 2) + 1))
     store = [] if scratch is None else scratch
     if counting:      # S-CSM: whole-number sums, the points in input order
-        bx = base[:, 0]
-        cuts = np.unique(np.quantile(bx, np.arange(1, n_threads) / n_threads).astype(np.int64) >> 2) << 2
-        edges = [int(lo[0])] + [int(c) for c in cuts if lo[0] < c < lo[0] + dims[0]] + [int(lo[0] + dims[0])]
+        edges = [int(lo[0]), int(lo[0] + dims[0])]
+        if n_threads > 1:   # x ranges of whole blocks, cut at the points' quantiles
+            cuts = np.unique(np.quantile(base[:, 0], np.arange(1, n_threads) / n_threads)
+                             .astype(np.int64) >> 2) << 2
+            edges = edges[:1] + [int(c) for c in cuts if lo[0] < c < lo[0] + dims[0]] + edges[1:]
         n_vox = max(1, min(len(base), n_box))
         jobs = [(labels, base, x0, x1, lo, dims, dense_k)
                 + _scratch(store, j, n_vox, min(n_vox, n_blk), 0 if dense_k else n_vox, dense_k)

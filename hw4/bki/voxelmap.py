@@ -182,7 +182,7 @@ class VoxelMap:
         labels : (N,) int array, classes ``0 .. K - 1``
         """
         points = np.asarray(points, dtype=float)
-        labels = np.asarray(labels).astype(np.int64)
+        labels = np.ascontiguousarray(labels, dtype=np.int64)   # read only: no copy when int64
         if points.ndim != 2 or points.shape[1] != 3 or labels.shape != (len(points),):
             raise InputError(f"training points must be (N, 3) with N labels; got {points.shape} "
                              f"and {labels.shape}.")
