@@ -483,6 +483,11 @@ def _scan_evidence(points, labels, base, order, omask, t0, t1, x0, x1, lo, dims,
             f0 = min(f0, w - l0)
             f1 = min(f1, w - l1)
             f2 = min(f2, w - l2)
+            zmin = -np.inf            # wide windows: rows beyond ell (from the nearest z) skipped
+            if l2 > 2:
+                zmin = np.inf
+                for cz in range(f2, f2 + l2):
+                    zmin = min(zmin, sq[2, cz])
             for a in range(f0, f0 + l0):
                 vx = bx + a - R
                 inx = vx >= x0 and vx < x1
@@ -490,6 +495,8 @@ def _scan_evidence(points, labels, base, order, omask, t0, t1, x0, x1, lo, dims,
                 for b in range(f1, f1 + l1):
                     vy = by + b - R
                     sxy = sq[0, a] + sq[1, b]
+                    if sxy + zmin >= ell2:
+                        continue
                     rxy = rx + (vy - lo[1]) * d2z - lo[2]
                     for cz in range(f2, f2 + l2):
                         vz = bz + cz - R
