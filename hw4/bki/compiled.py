@@ -232,7 +232,8 @@ def _free_leaves(hits, origin, length, fr, size):  # pragma: no cover - compiled
         if (k + 1) * fr < L:
             k += 1
         kk[i] = k
-        total += 1 + k + (1 if L > fr else 0)
+        total += k + (1 if L > fr else 0)
+    total += 1          # every ray's first sample is the origin: one leaf for all of them
     hbits = 4
     while (1 << hbits) < 2 * total:
         hbits += 1
