@@ -489,23 +489,40 @@ def _scan_evidence(points, labels, base, order, omask, t0, t1, x0, x1, lo, dims,
                 zmin = np.inf
                 for cz in range(f2, f2 + l2):
                     zmin = min(zmin, sq[2, cz])
-            for a in range(f0, f0 + l0):
-                vx = bx + a - R
-                inx = vx >= x0 and vx < x1
-                rx = ((vx - lo[0]) & smask) * s1
-                for b in range(f1, f1 + l1):
-                    vy = by + b - R
-                    sxy = sq[0, a] + sq[1, b]
-                    if sxy + zmin >= ell2:
-                        continue
-                    rxy = rx + (vy - lo[1]) * d2z - lo[2]
-                    for cz in range(f2, f2 + l2):
-                        vz = bz + cz - R
-                        d2 = sxy + sq[2, cz]
-                        cand_d2[m] = d2
-                        cand_r[m] = rxy + vz
-                        cand_o[m] = (a << 42) | (b << 21) | cz
-                        m += (d2 < ell2) & inx
+            if l0 == 2 and l1 == 2 and l2 == 2:   # the common window (ell <= r): constant loops
+                for a in range(f0, f0 + 2):
+                    vx = bx + a - R
+                    inx = vx >= x0 and vx < x1
+                    rx = ((vx - lo[0]) & smask) * s1
+                    for b in range(f1, f1 + 2):
+                        vy = by + b - R
+                        sxy = sq[0, a] + sq[1, b]
+                        rxy = rx + (vy - lo[1]) * d2z - lo[2]
+                        for cz in range(f2, f2 + 2):
+                            vz = bz + cz - R
+                            d2 = sxy + sq[2, cz]
+                            cand_d2[m] = d2
+                            cand_r[m] = rxy + vz
+                            cand_o[m] = (a << 42) | (b << 21) | cz
+                            m += (d2 < ell2) & inx
+            else:
+                for a in range(f0, f0 + l0):
+                    vx = bx + a - R
+                    inx = vx >= x0 and vx < x1
+                    rx = ((vx - lo[0]) & smask) * s1
+                    for b in range(f1, f1 + l1):
+                        vy = by + b - R
+                        sxy = sq[0, a] + sq[1, b]
+                        if sxy + zmin >= ell2:
+                            continue
+                        rxy = rx + (vy - lo[1]) * d2z - lo[2]
+                        for cz in range(f2, f2 + l2):
+                            vz = bz + cz - R
+                            d2 = sxy + sq[2, cz]
+                            cand_d2[m] = d2
+                            cand_r[m] = rxy + vz
+                            cand_o[m] = (a << 42) | (b << 21) | cz
+                            m += (d2 < ell2) & inx
         for j in range(m):
             k = 1.0 if counting else _kernel(cand_d2[j], scale, sf2, table)
             ridx = cand_r[j]
