@@ -28,8 +28,10 @@ same bit for bit (the tests compare the two engines):
   offsets per point). S-CSM (:func:`_count_evidence`) adds whole numbers, exact in any order:
   its points are counted in input order (no voxel order), each voxel found through its block.
 
-New voxels take pool slots in (block key, voxel in block) order here (the numpy engine: raveled
-voxel order of the scan's box); the pool's row order is internal, :meth:`VoxelMap.evidence` and
+The merge (one compiled pass each): :func:`_block_rows` finds the map rows of the scan's blocks
+(new ones merged into the sorted keys), :func:`_assign` gives new voxels pool slots in (block
+key, voxel in block) order (the numpy engine: raveled voxel order of the scan's box), and
+:func:`_accumulate` adds the sums; the pool's row order is internal, :meth:`VoxelMap.evidence` and
 :meth:`VoxelMap.view` are the same. Threads (``HW4_THREADS``, default 1; :func:`threads`): each
 sums the voxels of its own slab of x (whole blocks) over the same points in the same order, and
 the slabs are merged in key order, so map and pool are the same bit for bit on any number of

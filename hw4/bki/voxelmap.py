@@ -15,8 +15,9 @@ the ``K`` classes (0 = free), where ``e_k`` is the evidence gathered from traini
 Storage is a hash of blocks: the voxels are grouped in blocks of ``4 x 4 x 4``; a sorted array of
 the keys of the blocks seen so far maps each block to a row of a table that holds, per voxel of the
 block, the slot of its evidence in a pool with one row per voxel with evidence (``-1``: none yet).
-Table and pool grow (by half their size at a time) with the observed volume, never with a bounding
-box, and empty voxels cost 4 bytes. A scan's S-BKI sums over all its (training point, voxel) pairs
+Table and pool grow (by half their size at a time; the pool in place, ``ndarray.resize``, unless
+something views it) with the observed volume, never with a bounding box, and empty voxels cost 4
+bytes. A scan's S-BKI sums over all its (training point, voxel) pairs
 run in one order (points in raveled voxel order, per point the offsets in lexicographic order),
 so the map is deterministic. Two engines give the same map bit for bit: ``"compiled"`` (the
 default; :mod:`hw4.bki.compiled`, numba; ``HW4_THREADS`` threads, default 1, the same map on any
