@@ -55,39 +55,41 @@ def _leaf_keys(points, size):  # pragma: no cover - compiled
     """Per point a key of its leaf ``floor(x / size)``, lexicographic in (x, y, z) (relative to the
     scan's box of leaves, or the packed key of training.py when that box is too large), and the
     largest key possible. ``far`` when a leaf index lies outside +-2^20 (keys then unset). The
-    packed keys first (and the box), then, in place, the keys relative to the box."""
+    leaves first in a loop without branches (the divisions vectorised), then the box, then the
+    keys; ``points`` C-contiguous."""
     n = points.shape[0]
+    flat = points.reshape(-1)
+    cells = np.empty(3 * n)
+    for j in range(3 * n):
+        cells[j] = np.floor(flat[j] / size)
     keys = np.empty(n, np.int64)
-    lo0 = lo1 = lo2 = np.int64(1) << 62
-    hi0 = hi1 = hi2 = np.int64(-1)
-    for i in range(n):
-        c0 = np.floor(points[i, 0] / size)
-        c1 = np.floor(points[i, 1] / size)
-        c2 = np.floor(points[i, 2] / size)
-        if (c0 < -_OFF or c0 >= _OFF or c1 < -_OFF or c1 >= _OFF or c2 < -_OFF
-                or c2 >= _OFF):
-            return keys, 0, True
-        u0 = np.int64(c0) + _OFF
-        u1 = np.int64(c1) + _OFF
-        u2 = np.int64(c2) + _OFF
-        keys[i] = (u0 << 42) | (u1 << 21) | u2
-        lo0 = min(lo0, u0)
-        hi0 = max(hi0, u0)
-        lo1 = min(lo1, u1)
-        hi1 = max(hi1, u1)
-        lo2 = min(lo2, u2)
-        hi2 = max(hi2, u2)
     if n == 0:
         return keys, 0, False
-    ny = hi1 - lo1 + 1
-    nz = hi2 - lo2 + 1
-    nx = hi0 - lo0 + 1
-    if float(nx) * ny * nz >= 2.0 ** 62:
-        return keys, (1 << 63) - 1, False
-    m21 = (np.int64(1) << 21) - 1
+    lo0 = lo1 = lo2 = np.inf
+    hi0 = hi1 = hi2 = -np.inf
     for i in range(n):
-        k = keys[i]
-        keys[i] = (((k >> 42) - lo0) * ny + (((k >> 21) & m21) - lo1)) * nz + ((k & m21) - lo2)
+        lo0 = min(lo0, cells[3 * i])
+        hi0 = max(hi0, cells[3 * i])
+        lo1 = min(lo1, cells[3 * i + 1])
+        hi1 = max(hi1, cells[3 * i + 1])
+        lo2 = min(lo2, cells[3 * i + 2])
+        hi2 = max(hi2, cells[3 * i + 2])
+    if not (lo0 >= -_OFF and lo1 >= -_OFF and lo2 >= -_OFF and hi0 < _OFF and hi1 < _OFF
+            and hi2 < _OFF):
+        return keys, 0, True
+    l0, l1, l2 = np.int64(lo0), np.int64(lo1), np.int64(lo2)
+    nx = np.int64(hi0) - l0 + 1
+    ny = np.int64(hi1) - l1 + 1
+    nz = np.int64(hi2) - l2 + 1
+    if float(nx) * ny * nz >= 2.0 ** 62:
+        for i in range(n):
+            keys[i] = (((np.int64(cells[3 * i]) + _OFF) << 42)
+                       | ((np.int64(cells[3 * i + 1]) + _OFF) << 21)
+                       | (np.int64(cells[3 * i + 2]) + _OFF))
+        return keys, (1 << 63) - 1, False
+    for i in range(n):
+        keys[i] = (((np.int64(cells[3 * i]) - l0) * ny + (np.int64(cells[3 * i + 1]) - l1)) * nz
+                   + (np.int64(cells[3 * i + 2]) - l2))
     return keys, nx * ny * nz - 1, False
 
 
@@ -313,19 +315,21 @@ def _free_leaves(hits, origin, length, fr, size):  # pragma: no cover - compiled
 
 @njit(cache=True, nogil=True)
 def _bases(points, res):  # pragma: no cover - compiled
-    """``floor(points / res)`` as int64 and its per-axis minimum and maximum."""
+    """``floor(points / res)`` as int64 and its per-axis minimum and maximum (``points``
+    C-contiguous; the divisions in a loop without branches, vectorised)."""
     n = points.shape[0]
+    flat = points.reshape(-1)
     base = np.empty((n, 3), np.int64)
+    bflat = base.reshape(-1)
+    for j in range(3 * n):
+        bflat[j] = np.int64(np.floor(flat[j] / res))
     lo = np.full(3, np.iinfo(np.int64).max)
     hi = np.full(3, np.iinfo(np.int64).min)
     for i in range(n):
         for a in range(3):
-            v = np.int64(np.floor(points[i, a] / res))
-            base[i, a] = v
-            if v < lo[a]:
-                lo[a] = v
-            if v > hi[a]:
-                hi[a] = v
+            v = base[i, a]
+            lo[a] = min(lo[a], v)
+            hi[a] = max(hi[a], v)
     return base, lo, hi
 
 
@@ -798,7 +802,7 @@ def free_leaves(hits: np.ndarray, origin: np.ndarray, length: np.ndarray, fr: fl
 def bases(points: np.ndarray, resolution: float):
     """``(floor(points / resolution), its minimum, its maximum)`` per axis, int64."""
     _announce()
-    return _bases(points, float(resolution))
+    return _bases(np.ascontiguousarray(points, dtype=np.float64), float(resolution))
 
 
 _announced = False
