@@ -221,8 +221,9 @@ def _free_leaves(hits, origin, length, fr, size):  # pragma: no cover - compiled
     """The leaves of :func:`_free_samples`' samples, as :func:`_leaf_keys` and :func:`_group_packed`
     make them from the samples (without holding the samples): each sample's leaf
     ``floor(x / size)`` found in a hash of the leaves seen so far, its coordinates added to the
-    leaf's sums in sample order (from 0); the centroids (sums / count) in increasing
-    lexicographic leaf order. ``far`` when a leaf index lies outside +-2^20 (centroids unset)."""
+    leaf's sums in sample order (from 0): per leaf (in order of its first sample) its packed key,
+    sums and count, and ``far`` when a leaf index lies outside +-2^20 (the leaves then unset).
+    :func:`free_leaves` orders them and divides."""
     n = hits.shape[0]
     kk = np.empty(n, np.int64)      # per ray: its regular samples (as _free_samples)
     total = 0
@@ -277,7 +278,7 @@ def _free_leaves(hits, origin, length, fr, size):  # pragma: no cover - compiled
                 cz = np.floor(z / size)
                 if (cx < -_OFF or cx >= _OFF or cy < -_OFF or cy >= _OFF or cz < -_OFF
                         or cz >= _OFF):
-                    return np.zeros((0, 3)), True
+                    return lkey[:0], sums[:0], cnt[:0], True
                 key = (((np.int64(cx) + _OFF) << 42) | ((np.int64(cy) + _OFF) << 21)
                        | (np.int64(cz) + _OFF))
                 if pos == 0:
@@ -302,15 +303,7 @@ def _free_leaves(hits, origin, length, fr, size):  # pragma: no cover - compiled
             sums[last_id, 1] += y
             sums[last_id, 2] += z
             cnt[last_id] += 1
-    order = np.argsort(lkey[:m])
-    cen = np.empty((m, 3))
-    for g in range(m):
-        q = order[g]
-        c = np.float64(cnt[q])
-        cen[g, 0] = sums[q, 0] / c
-        cen[g, 1] = sums[q, 1] / c
-        cen[g, 2] = sums[q, 2] / c
-    return cen, False
+    return lkey[:m], sums[:m], cnt[:m], False
 
 
 @njit(cache=True, nogil=True)
@@ -794,9 +787,13 @@ def free_leaves(hits: np.ndarray, origin: np.ndarray, length: np.ndarray, fr: fl
                 size: float):
     """``downsample(free_samples(hits, origin, length, fr), None, size)`` without the samples
     held: ``(centroids, far)``, the same centroids bit for bit (see :func:`_free_leaves`)."""
-    return _free_leaves(np.ascontiguousarray(hits, dtype=np.float64),
-                        np.ascontiguousarray(origin, dtype=np.float64), length, float(fr),
-                        float(size))
+    lkey, sums, cnt, far = _free_leaves(np.ascontiguousarray(hits, dtype=np.float64),
+                                        np.ascontiguousarray(origin, dtype=np.float64), length,
+                                        float(fr), float(size))
+    if far:
+        return np.zeros((0, 3)), True
+    order = np.argsort(lkey)        # distinct keys: increasing lexicographic leaf order
+    return sums[order] / cnt[order, None], False   # each sum / its count, as bincount's mean
 
 
 def bases(points: np.ndarray, resolution: float):
