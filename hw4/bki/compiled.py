@@ -51,12 +51,13 @@ _OFF = 1 << 20   # leaf / block index offset of the packed keys (as training.py,
 
 
 @njit(cache=True, nogil=True)
-def _leaf_keys(points, size):  # pragma: no cover - compiled
+def _leaf_keys(points, size, nb=0):  # pragma: no cover - compiled
     """Per point a key of its leaf ``floor(x / size)``, lexicographic in (x, y, z) (relative to the
     scan's box of leaves, or the packed key of training.py when that box is too large), and the
     largest key possible. ``far`` when a leaf index lies outside +-2^20 (keys then unset). The
     leaves first in a loop without branches (the divisions vectorised), then the box, then the
-    keys; ``points`` C-contiguous."""
+    keys; ``points`` C-contiguous. With ``nb`` > 0 the box's keys come as ``key << nb | index``
+    when that fits in 63 bits (then ``packed``)."""
     n = points.shape[0]
     flat = points.reshape(-1)
     cells = np.empty(3 * n)
@@ -64,7 +65,7 @@ def _leaf_keys(points, size):  # pragma: no cover - compiled
         cells[j] = np.floor(flat[j] / size)
     keys = np.empty(n, np.int64)
     if n == 0:
-        return keys, 0, False
+        return keys, 0, False, False
     lo0 = lo1 = lo2 = np.inf
     hi0 = hi1 = hi2 = -np.inf
     for i in range(n):
@@ -76,7 +77,7 @@ def _leaf_keys(points, size):  # pragma: no cover - compiled
         hi2 = max(hi2, cells[3 * i + 2])
     if not (lo0 >= -_OFF and lo1 >= -_OFF and lo2 >= -_OFF and hi0 < _OFF and hi1 < _OFF
             and hi2 < _OFF):
-        return keys, 0, True
+        return keys, 0, True, False
     l0, l1, l2 = np.int64(lo0), np.int64(lo1), np.int64(lo2)
     nx = np.int64(hi0) - l0 + 1
     ny = np.int64(hi1) - l1 + 1
@@ -86,11 +87,16 @@ def _leaf_keys(points, size):  # pragma: no cover - compiled
             keys[i] = (((np.int64(cells[3 * i]) + _OFF) << 42)
                        | ((np.int64(cells[3 * i + 1]) + _OFF) << 21)
                        | (np.int64(cells[3 * i + 2]) + _OFF))
-        return keys, (1 << 63) - 1, False
+        return keys, (1 << 63) - 1, False, False
+    top = nx * ny * nz - 1
+    bits = 0
+    while (np.int64(1) << bits) <= top:
+        bits += 1
+    sh = nb if (nb > 0 and bits + nb <= 63) else 0
     for i in range(n):
-        keys[i] = (((np.int64(cells[3 * i]) - l0) * ny + (np.int64(cells[3 * i + 1]) - l1)) * nz
-                   + (np.int64(cells[3 * i + 2]) - l2))
-    return keys, nx * ny * nz - 1, False
+        keys[i] = (((((np.int64(cells[3 * i]) - l0) * ny + (np.int64(cells[3 * i + 1]) - l1)) * nz
+                    + (np.int64(cells[3 * i + 2]) - l2)) << sh) | (i if sh else 0))
+    return keys, top, False, sh > 0
 
 
 @njit(cache=True, nogil=True)
@@ -758,15 +764,15 @@ def downsample(points: np.ndarray, labels, size: float, num_labels: int = 0):
     else:
         lab = np.ascontiguousarray(labels, dtype=np.int64)
         k = int(num_labels) if num_labels else (int(lab.max()) + 1 if len(lab) else 1)
-    keys, top, far = _leaf_keys(points, float(size))
+    nb = max(1, int(len(points) - 1).bit_length())
+    keys, top, far, packed = _leaf_keys(points, float(size), nb)   # key << nb | index
     if far:
         return np.zeros((0, 3)), None, True
-    nb = max(1, int(len(keys) - 1).bit_length())
-    if int(top).bit_length() + nb > 63:       # too wide to pack with the index: rank the keys
+    if not packed:                            # too wide to pack with the index: rank the keys
         keys = np.unique(keys, return_inverse=True)[1].astype(np.int64)
-    keys <<= nb                               # key << nb | index, sorted: the stable order
-    keys |= np.arange(len(keys))
-    keys.sort()
+        keys <<= nb
+        keys |= np.arange(len(keys))
+    keys.sort()                               # sorted: the stable order of the leaves
     cen, maj = _group_packed(points, lab, keys, nb, k)
     return cen, (None if labels is None else maj), False
 
