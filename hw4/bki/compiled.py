@@ -106,11 +106,13 @@ def _group_packed(points, labels, packed, nb, num_labels):  # pragma: no cover -
     leaf (its rank among the distinct keys) is scattered to its position; then the points are
     streamed in input order, each added to its leaf's sums (from 0, in input order: what the
     stable order and ``bincount`` add), and the sums divided by the counts. The majority: a
-    leaf whose points share one label has it; the votes of the other leaves are counted over
-    the sorted order (ties to the smallest label)."""
+    leaf whose points share one label has it (found without branches: each point against the
+    previous one of its leaf); the votes of the other leaves are counted over the sorted order (ties to
+    the smallest label)."""
     n = points.shape[0]
     mask = (np.int64(1) << nb) - 1
     inv = np.empty(n, np.int32)
+    has = labels.shape[0] > 0
     m = 0
     prev = np.int64(-1)               # keys are >= 0: the first point starts a leaf
     for t in range(n):                # without branches
@@ -119,25 +121,22 @@ def _group_packed(points, labels, packed, nb, num_labels):  # pragma: no cover -
         prev = kk
         inv[packed[t] & mask] = m - 1
     sums = np.zeros((m, 4))           # per leaf: the sums of x, y, z and the count (exact)
-    has = labels.shape[0] > 0
-    maj = np.empty(m if has else 0, np.int64)
+    maj = np.full(m if has else 0, -1, np.int64)   # per leaf: the label of its latest point
     mixed = np.zeros(m if has else 0, np.bool_)
-    if has:
-        maj[:] = -1
-    n_mixed = 0
     for i in range(n):
         g = inv[i]
         sums[g, 0] += points[i, 0]
         sums[g, 1] += points[i, 1]
         sums[g, 2] += points[i, 2]
         sums[g, 3] += 1.0
-        if has:
+        if has:                       # a label unlike its leaf's previous one: mixed
             lab = labels[i]
-            if maj[g] < 0:
-                maj[g] = lab
-            elif maj[g] != lab and not mixed[g]:
-                mixed[g] = True
-                n_mixed += 1
+            r = maj[g]
+            mixed[g] |= (r >= 0) & (lab != r)
+            maj[g] = lab
+    n_mixed = 0
+    for g in range(mixed.shape[0]):
+        n_mixed += mixed[g]
     cen = np.empty((m, 3))
     for g in range(m):
         c = sums[g, 3]
