@@ -18,8 +18,9 @@ same bit for bit (the tests compare the two engines):
   (stable), taken point by point, each point's pairs in lexicographic offset order (as
   :mod:`hw4.bki.kernel_sums`): per axis only the window of offsets it can reach within ell
   (:func:`window_span`; all of them where rounding lets more in), the pairs within ell listed
-  without branches, each pair's kernel weight from the table of
-  :func:`hw4.core.kernel.sparse_kernel_pieces`; per (voxel, class) the weights are summed from 0
+  without branches, batch by batch of points, each batch's kernel weights from the table of
+  :func:`hw4.core.kernel.sparse_kernel_pieces` in loops of their own (:func:`_kernels`, the
+  square roots vectorised); per (voxel, class) the weights are summed from 0
   in that order into a sparse per-scan structure (a target's local voxel found in a
   cache-resident ring of x slabs); ``_assign`` gives the new voxels their pool slots and
   ``_accumulate`` adds the sums to the map's evidence. Adding a
@@ -344,27 +345,78 @@ def _codes(base, lo, dims, nb):  # pragma: no cover - compiled
     return codes
 
 
+_BATCH = 4096
+"""Pairs per batch of :func:`_scan_evidence` (points of one x slab whose candidates fit): their
+kernel weights in the loops of :func:`_kernels`, then their sums."""
+
+
 @njit(cache=True, nogil=True)
-def _kernel(d2, scale, sf2, table):  # pragma: no cover - compiled
-    """The sparse kernel at squared distance ``d2 < ell^2`` [m^2] as :func:`sparse_kernel_pieces`
-    rounds it: ``r = d P / ell`` (``scale = P / ell``), its piece ``j`` and ``u = r - j - 1/2``,
-    the piece's polynomial by Horner from the top (the degree a constant: unrolled), times sf2,
-    clamped at 0."""
-    r = np.sqrt(d2) * scale
-    j = int(r)
-    if j > _PIECES - 1:
-        j = _PIECES - 1
-    u = r - j
-    u -= 0.5
-    k = table[j, _DEGREE] * u
-    for h in range(_DEGREE - 1, 0, -1):
-        k += table[j, h]
-        k *= u
-    k += table[j, 0]
-    k *= sf2
-    if k < 0.0:
-        k = 0.0
-    return k
+def _kernels(d2, out, uu, jj, m, scale, sf2, table):  # pragma: no cover - compiled
+    """The sparse kernel at the squared distances ``d2[:m] < ell^2`` [m^2] into ``out[:m]``, as
+    :func:`sparse_kernel_pieces` rounds it: ``r = d P / ell`` (``scale = P / ell``), its piece
+    ``j`` and ``u = r - j - 1/2``, the piece's polynomial by Horner from the top (the degree a
+    constant: unrolled), times sf2, clamped at 0. Two loops without branches: ``u`` and ``j``
+    (into the scratch ``uu``, ``jj``; vectorised, square roots included), then the polynomials
+    (the coefficients of ``table`` read per pair)."""
+    for q in range(m):
+        r = np.sqrt(d2[q]) * scale
+        j = min(int(r), _PIECES - 1)
+        u = r - j
+        uu[q] = u - 0.5
+        jj[q] = j * (_DEGREE + 1)
+    tab = table.reshape(-1)
+    for q in range(m):
+        u = uu[q]
+        b = jj[q]
+        k = tab[b + _DEGREE] * u
+        for h in range(_DEGREE - 1, 0, -1):
+            k += tab[b + h]
+            k *= u
+        k += tab[b]
+        k *= sf2
+        out[q] = 0.0 if k < 0.0 else k
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _axis2(p, b, res, ell2):  # pragma: no cover - compiled
+    """One axis of a point (coordinate ``p`` [m], voxel ``b``) with R = 1: the squared distances
+    to the centres of offsets -1, 0, 1 (as :func:`_scan_evidence` computes them), how many lie
+    below ``ell2`` and the first that does (3: none)."""
+    d0 = p - (b + (-1 + 0.5)) * res
+    d1 = p - (b + (0 + 0.5)) * res
+    d2 = p - (b + (1 + 0.5)) * res
+    q0 = d0 * d0
+    q1 = d1 * d1
+    q2 = d2 * d2
+    n = np.int64(q0 < ell2) + np.int64(q1 < ell2) + np.int64(q2 < ell2)
+    f = 0 if q0 < ell2 else (1 if q1 < ell2 else (2 if q2 < ell2 else 3))
+    return q0, q1, q2, n, f
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _window2(px, py, pz, bx, by, bz, res, ell2, out):  # pragma: no cover - compiled
+    """The window of 2 offsets per axis of a point (R = 1, span 2), as the general path of
+    :func:`_scan_evidence` finds it: True when every axis has 1 or 2 offsets within ell, then
+    ``out[0:2]``, ``out[2:4]``, ``out[4:6]`` the squared distances along x, y, z at the window's
+    offsets ``f - 1`` and ``f`` and ``out[6:9]`` the window's first index ``f`` (0 or 1) per
+    axis; False otherwise (an axis with none, or with 3 by rounding: the general path)."""
+    x0, x1, x2, nx, fx = _axis2(px, bx, res, ell2)
+    y0, y1, y2, ny, fy = _axis2(py, by, res, ell2)
+    z0, z1, z2, nz, fz = _axis2(pz, bz, res, ell2)
+    fx = min(fx, 1)
+    fy = min(fy, 1)
+    fz = min(fz, 1)
+    out[0] = x0 if fx == 0 else x1
+    out[1] = x1 if fx == 0 else x2
+    out[2] = y0 if fy == 0 else y1
+    out[3] = y1 if fy == 0 else y2
+    out[4] = z0 if fz == 0 else z1
+    out[5] = z1 if fz == 0 else z2
+    out[6] = fx
+    out[7] = fy
+    out[8] = fz
+    return nx > 0 and ny > 0 and nz > 0 and nx <= 2 and ny <= 2 and nz <= 2
+
 
 
 @njit(cache=True, nogil=True)
@@ -383,8 +435,11 @@ def _scan_evidence(points, labels, base, order, omask, t0, t1, x0, x1, lo, dims,
     (the distance is unimodal in the offset); at most ``span`` of them for any point in exact
     arithmetic (``ceil(2 ell / r)``, capped at ``2 R + 1``). The point's candidates are the
     ``span^3`` offsets of the window that starts at the first such offset per axis (a point with
-    more per axis, by rounding, takes all ``(2 R + 1)^3``); those within ell are listed without
-    branches, then their weights summed. A target's local voxel is looked up in a ring of x
+    more per axis, by rounding, takes all ``(2 R + 1)^3``; with R = 1 and span 2, the
+    SemanticKITTI settings, :func:`_window2` finds the window); those within ell are listed
+    without branches. The points go in batches (consecutive points of one x slab whose pairs fit
+    in ``_BATCH``): the batch's pairs are listed, their kernel weights computed in the loops of
+    :func:`_kernels`, then summed pair by pair in the same order. A target's local voxel is looked up in a ring of x
     slabs of the box (``2^ceil(log2(2 R + 1))`` slabs of ``dims[1] * dims[2]`` int32, at most
     the box): the points come in increasing x, so a target's slab lies within ``R`` of the
     current one, and a slot is cleared (only the entries set, from a list per slot) when a slab
@@ -425,14 +480,20 @@ def _scan_evidence(points, labels, base, order, omask, t0, t1, x0, x1, lo, dims,
     sq = np.empty((3, w))             # per axis and offset: the point's squared distance
     L = min(max(span, 1), w)
     w3 = w * w * w
-    cand_d2 = np.empty(w3)            # the point's pairs within ell: squared distance, ring
-    cand_r = np.empty(w3, np.int64)   # index, offset (a << 42 | b << 21 | c)
-    cand_o = np.empty(w3, np.int64)
+    cap = max(_BATCH, w3)             # pairs of a batch of points (a point's w3 candidates fit)
+    cand_d2 = np.empty(cap + w3)      # the batch's pairs within ell: squared distance, ring
+    cand_r = np.empty(cap + w3, np.int64)   # index, offset (a << 42 | b << 21 | c)
+    cand_o = np.empty(cap + w3, np.int64)
+    cand_k = np.empty(cap + w3)       # their kernel weights
+    cand_u = np.empty(cap + w3)
+    cand_j = np.empty(cap + w3, np.int64)
+    sq2 = np.empty(9)
+    bpt = np.empty(cap + 1, np.int64)   # the batch's points (with pairs) and their first pair
+    bfirst = np.empty(cap + 2, np.int64)
     prev_x = np.int64(-(1 << 62))
-    for t in range(t0, t1):
-        i = order[t] & omask
-        bx, by, bz = base[i, 0], base[i, 1], base[i, 2]
-        c = labels[i]
+    t = t0
+    while t < t1:
+        bx = base[order[t] & omask, 0]
         if bx != prev_x:              # the slabs within R of this x: their slots
             prev_x = bx
             for a in range(w):
@@ -446,135 +507,179 @@ def _scan_evidence(points, labels, base, order, omask, t0, t1, x0, x1, lo, dims,
                         ring[roff + setlist[roff + h]] = -1
                     nset[slot] = 0
                     held[slot] = vx
+        # a batch: the next points of this slab x while their candidates fit
         m = 0
-        if counting:
-            if bx >= x0 and bx < x1:
-                cand_d2[0] = 0.0
-                cand_r[0] = ((bx - lo[0]) & smask) * s1 + (by - lo[1]) * d2z + (bz - lo[2])
-                cand_o[0] = (R << 42) | (R << 21) | R
-                m = 1
-        else:
-            px, py, pz = points[i, 0], points[i, 1], points[i, 2]
-            f0 = w
-            f1 = w
-            f2 = w
-            n0 = 0
-            n1 = 0
-            n2 = 0
-            for a in range(w):
-                dx = px - (bx + ((a - R) + 0.5)) * res
-                dy = py - (by + ((a - R) + 0.5)) * res
-                dz = pz - (bz + ((a - R) + 0.5)) * res
-                sq[0, a] = dx * dx
-                sq[1, a] = dy * dy
-                sq[2, a] = dz * dz
-                ok0 = dx * dx < ell2
-                ok1 = dy * dy < ell2
-                ok2 = dz * dz < ell2
-                n0 += ok0
-                n1 += ok1
-                n2 += ok2
-                f0 = min(f0, a if ok0 else w)
-                f1 = min(f1, a if ok1 else w)
-                f2 = min(f2, a if ok2 else w)
-            if n0 == 0 or n1 == 0 or n2 == 0:
-                continue
-            l0 = L
-            l1 = L
-            l2 = L
-            if n0 > L or n1 > L or n2 > L:   # more than span offsets (rounding): all of them
-                f0 = f1 = f2 = 0
-                l0 = l1 = l2 = w
-            f0 = min(f0, w - l0)
-            f1 = min(f1, w - l1)
-            f2 = min(f2, w - l2)
-            zmin = -np.inf            # wide windows: rows beyond ell (from the nearest z) skipped
-            if l2 > 2:
-                zmin = np.inf
-                for cz in range(f2, f2 + l2):
-                    zmin = min(zmin, sq[2, cz])
-            if l0 == 2 and l1 == 2 and l2 == 2:   # the common window (ell <= r): constant loops
-                for a in range(f0, f0 + 2):
-                    vx = bx + a - R
+        nbp = 0
+        while t < t1 and m <= cap - w3:
+            i = order[t] & omask
+            if base[i, 0] != bx:
+                break
+            t += 1
+            by, bz = base[i, 1], base[i, 2]
+            m_start = m
+            if counting:
+                if bx >= x0 and bx < x1:
+                    cand_d2[m] = 0.0
+                    cand_r[m] = ((bx - lo[0]) & smask) * s1 + (by - lo[1]) * d2z + (bz - lo[2])
+                    cand_o[m] = (R << 42) | (R << 21) | R
+                    m += 1
+            elif w == 3 and L == 2 and _window2(points[i, 0], points[i, 1], points[i, 2], bx,
+                                                by, bz, res, ell2, sq2):
+                # the common window (R = 1, ell <= r): per axis the 2 offsets from _window2
+                f0 = np.int64(sq2[6])
+                f1 = np.int64(sq2[7])
+                f2 = np.int64(sq2[8])
+                for a in range(2):
+                    vx = bx + f0 + a - 1
                     inx = vx >= x0 and vx < x1
                     rx = ((vx - lo[0]) & smask) * s1
-                    for b in range(f1, f1 + 2):
-                        vy = by + b - R
-                        sxy = sq[0, a] + sq[1, b]
+                    for b in range(2):
+                        vy = by + f1 + b - 1
+                        sxy = sq2[a] + sq2[2 + b]
                         rxy = rx + (vy - lo[1]) * d2z - lo[2]
-                        for cz in range(f2, f2 + 2):
-                            vz = bz + cz - R
-                            d2 = sxy + sq[2, cz]
+                        for cz in range(2):
+                            vz = bz + f2 + cz - 1
+                            d2 = sxy + sq2[4 + cz]
                             cand_d2[m] = d2
                             cand_r[m] = rxy + vz
-                            cand_o[m] = (a << 42) | (b << 21) | cz
+                            cand_o[m] = ((f0 + a) << 42) | ((f1 + b) << 21) | (f2 + cz)
                             m += (d2 < ell2) & inx
             else:
-                for a in range(f0, f0 + l0):
-                    vx = bx + a - R
-                    inx = vx >= x0 and vx < x1
-                    rx = ((vx - lo[0]) & smask) * s1
-                    for b in range(f1, f1 + l1):
-                        vy = by + b - R
-                        sxy = sq[0, a] + sq[1, b]
-                        if sxy + zmin >= ell2:
-                            continue
-                        rxy = rx + (vy - lo[1]) * d2z - lo[2]
-                        for cz in range(f2, f2 + l2):
-                            vz = bz + cz - R
-                            d2 = sxy + sq[2, cz]
-                            cand_d2[m] = d2
-                            cand_r[m] = rxy + vz
-                            cand_o[m] = (a << 42) | (b << 21) | cz
-                            m += (d2 < ell2) & inx
-        for j in range(m):
-            k = 1.0 if counting else _kernel(cand_d2[j], scale, sf2, table)
-            ridx = cand_r[j]
-            v = ring[ridx]
-            if v < 0:    # the voxel's first pair of this scan (its block's, maybe)
-                o = cand_o[j]
-                vx = bx + (o >> 42) - R
-                vy = by + ((o >> 21) & 2097151) - R
-                vz = bz + (o & 2097151) - R
-                bc = (((vx >> 2) - blo0) * bd1 + ((vy >> 2) - blo1)) * bd2 + ((vz >> 2) - blo2)
-                lb = blk[bc]
-                if lb < 0:
-                    lb = nb
-                    blk[bc] = lb
-                    for h in range(lb * 64, lb * 64 + 64):
-                        vloc[h] = -1
-                    nb += 1
-                v = nv
-                vloc[lb * 64 + (((vx & 3) << 4) | ((vy & 3) << 2) | (vz & 3))] = v
-                vcnt[v] = 0
-                c0[v] = c
-                w0[v] = 0.0
-                more[v] = -1
-                for cq in range(dense_k):
-                    acc[v * dense_k + cq] = 0.0
-                ring[ridx] = v
-                slot = (vx - lo[0]) & smask
-                setlist[slot * s1 + nset[slot]] = ridx - slot * s1
-                nset[slot] += 1
-                nv += 1
-            vcnt[v] += 1
-            if dense_k:
-                acc[v * dense_k + c] += k
-                continue
-            if c0[v] == c:
-                w0[v] += k
-                continue
-            e = more[v]
-            while e >= 0 and ecls[e] != c:
-                e = enext[e]
-            if e < 0:
-                e = ne
-                ecls[e] = c
-                evalue[e] = 0.0
-                enext[e] = more[v]
-                more[v] = e
-                ne += 1
-            evalue[e] += k
+                px, py, pz = points[i, 0], points[i, 1], points[i, 2]
+                f0 = w
+                f1 = w
+                f2 = w
+                n0 = 0
+                n1 = 0
+                n2 = 0
+                for a in range(w):
+                    dx = px - (bx + ((a - R) + 0.5)) * res
+                    dy = py - (by + ((a - R) + 0.5)) * res
+                    dz = pz - (bz + ((a - R) + 0.5)) * res
+                    sq[0, a] = dx * dx
+                    sq[1, a] = dy * dy
+                    sq[2, a] = dz * dz
+                    ok0 = dx * dx < ell2
+                    ok1 = dy * dy < ell2
+                    ok2 = dz * dz < ell2
+                    n0 += ok0
+                    n1 += ok1
+                    n2 += ok2
+                    f0 = min(f0, a if ok0 else w)
+                    f1 = min(f1, a if ok1 else w)
+                    f2 = min(f2, a if ok2 else w)
+                if n0 == 0 or n1 == 0 or n2 == 0:
+                    continue
+                l0 = L
+                l1 = L
+                l2 = L
+                if n0 > L or n1 > L or n2 > L:   # more than span offsets (rounding): all of them
+                    f0 = f1 = f2 = 0
+                    l0 = l1 = l2 = w
+                f0 = min(f0, w - l0)
+                f1 = min(f1, w - l1)
+                f2 = min(f2, w - l2)
+                zmin = -np.inf            # wide windows: rows beyond ell (from the nearest z) skipped
+                if l2 > 2:
+                    zmin = np.inf
+                    for cz in range(f2, f2 + l2):
+                        zmin = min(zmin, sq[2, cz])
+                if l0 == 2 and l1 == 2 and l2 == 2:   # the common window (ell <= r): constant loops
+                    for a in range(f0, f0 + 2):
+                        vx = bx + a - R
+                        inx = vx >= x0 and vx < x1
+                        rx = ((vx - lo[0]) & smask) * s1
+                        for b in range(f1, f1 + 2):
+                            vy = by + b - R
+                            sxy = sq[0, a] + sq[1, b]
+                            rxy = rx + (vy - lo[1]) * d2z - lo[2]
+                            for cz in range(f2, f2 + 2):
+                                vz = bz + cz - R
+                                d2 = sxy + sq[2, cz]
+                                cand_d2[m] = d2
+                                cand_r[m] = rxy + vz
+                                cand_o[m] = (a << 42) | (b << 21) | cz
+                                m += (d2 < ell2) & inx
+                else:
+                    for a in range(f0, f0 + l0):
+                        vx = bx + a - R
+                        inx = vx >= x0 and vx < x1
+                        rx = ((vx - lo[0]) & smask) * s1
+                        for b in range(f1, f1 + l1):
+                            vy = by + b - R
+                            sxy = sq[0, a] + sq[1, b]
+                            if sxy + zmin >= ell2:
+                                continue
+                            rxy = rx + (vy - lo[1]) * d2z - lo[2]
+                            for cz in range(f2, f2 + l2):
+                                vz = bz + cz - R
+                                d2 = sxy + sq[2, cz]
+                                cand_d2[m] = d2
+                                cand_r[m] = rxy + vz
+                                cand_o[m] = (a << 42) | (b << 21) | cz
+                                m += (d2 < ell2) & inx
+            if m > m_start:
+                bpt[nbp] = i
+                bfirst[nbp] = m_start
+                nbp += 1
+        bfirst[nbp] = m
+        if counting:
+            for j in range(m):
+                cand_k[j] = 1.0
+        else:
+            _kernels(cand_d2, cand_k, cand_u, cand_j, m, scale, sf2, table)
+        for p in range(nbp):
+            i = bpt[p]
+            by, bz = base[i, 1], base[i, 2]
+            c = labels[i]
+            for j in range(bfirst[p], bfirst[p + 1]):
+                k = cand_k[j]
+                ridx = cand_r[j]
+                v = ring[ridx]
+                if v < 0:    # the voxel's first pair of this scan (its block's, maybe)
+                    o = cand_o[j]
+                    vx = bx + (o >> 42) - R
+                    vy = by + ((o >> 21) & 2097151) - R
+                    vz = bz + (o & 2097151) - R
+                    bc = (((vx >> 2) - blo0) * bd1 + ((vy >> 2) - blo1)) * bd2 + ((vz >> 2) - blo2)
+                    lb = blk[bc]
+                    if lb < 0:
+                        lb = nb
+                        blk[bc] = lb
+                        for h in range(lb * 64, lb * 64 + 64):
+                            vloc[h] = -1
+                        nb += 1
+                    v = nv
+                    vloc[lb * 64 + (((vx & 3) << 4) | ((vy & 3) << 2) | (vz & 3))] = v
+                    vcnt[v] = 0
+                    c0[v] = c
+                    w0[v] = 0.0
+                    more[v] = -1
+                    for cq in range(dense_k):
+                        acc[v * dense_k + cq] = 0.0
+                    ring[ridx] = v
+                    slot = (vx - lo[0]) & smask
+                    setlist[slot * s1 + nset[slot]] = ridx - slot * s1
+                    nset[slot] += 1
+                    nv += 1
+                vcnt[v] += 1
+                if dense_k:
+                    acc[v * dense_k + c] += k
+                    continue
+                if c0[v] == c:
+                    w0[v] += k
+                    continue
+                e = more[v]
+                while e >= 0 and ecls[e] != c:
+                    e = enext[e]
+                if e < 0:
+                    e = ne
+                    ecls[e] = c
+                    evalue[e] = 0.0
+                    enext[e] = more[v]
+                    more[v] = e
+                    ne += 1
+                evalue[e] += k
     nc = 0 if dense_k else nv
     return (blk, vloc[:nb * 64], vcnt[:nv], c0[:nc], w0[:nc], more[:nc], ecls[:ne], evalue[:ne],
             enext[:ne], acc[:nv * dense_k])
@@ -968,5 +1073,5 @@ def _run(kernel, jobs):
     return list(_pool.map(lambda a: kernel(*a), jobs))
 
 
-KERNELS = (_kernel, _leaf_keys, _group_packed, _lengths, _free_samples, _free_leaves, _bases, _codes, _scan_evidence,
+KERNELS = (_kernels, _leaf_keys, _group_packed, _lengths, _free_samples, _free_leaves, _bases, _codes, _scan_evidence,
            _count_evidence, _block_rows, _assign, _accumulate)
