@@ -46,7 +46,7 @@ def test_point_windows_equal_numpy(monkeypatch, method, res, ell, K, span):
 
 
 def test_pool_grows_in_place_or_by_a_copy_when_viewed():
-    """The pool grows in place (resize) unless something views it; the map is the same."""
+    """The pool grows in place (resize) while small unless something views it; the map is the same."""
     from hw4.bki import VoxelMap
     rng = np.random.default_rng(5)
     scans = [(rng.normal(0, s, (5000, 3)), rng.integers(0, 8, 5000)) for s in (2, 5, 9)]

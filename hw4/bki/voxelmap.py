@@ -15,9 +15,9 @@ the ``K`` classes (0 = free), where ``e_k`` is the evidence gathered from traini
 Storage is a hash of blocks: the voxels are grouped in blocks of ``4 x 4 x 4``; a sorted array of
 the keys of the blocks seen so far maps each block to a row of a table that holds, per voxel of the
 block, the slot of its evidence in a pool with one row per voxel with evidence (``-1``: none yet).
-Table and pool grow (by half their size at a time; the pool in place, ``ndarray.resize``, unless
-something views it) with the observed volume, never with a bounding box, and empty voxels cost 4
-bytes. A scan's S-BKI sums over all its (training point, voxel) pairs
+Table and pool grow (by half their size at a time; the pool in place, ``ndarray.resize``, while
+small and not viewed, beyond 4 MiB into fresh zeroed arrays) with the observed volume, never with
+a bounding box, and empty voxels cost 4 bytes. A scan's S-BKI sums over all its (training point, voxel) pairs
 run in one order (points in raveled voxel order, per point the offsets in lexicographic order),
 so the map is deterministic. Two engines give the same map bit for bit: ``"compiled"`` (the
 default; :mod:`hw4.bki.compiled`, numba; ``HW4_THREADS`` threads, default 1, the same map on any
@@ -43,6 +43,7 @@ _SHIFT = 2               # log2(B)
 _OFF = np.int64(1 << 20)  # block index offset for packing; |block index| < 2^20
 _MAX_BOX = 1 << 24       # most voxels in one scan's scratch box of voxels
 _MAX_DIRECT = 1 << 21    # most (voxel, class) counts of a scan's box binned without compaction
+_FRESH = 1 << 22         # pool evidence [bytes] from which it grows into fresh arrays (see _reserve)
 
 UNKNOWN, FREE, OCCUPIED = 0, 1, 2
 METHODS = ("sbki", "scsm")
@@ -252,19 +253,24 @@ class VoxelMap:
                         self.count)
 
     def _reserve(self, n_new: int) -> None:
-        """Room in the pool for ``n_new`` more voxels (grown by half its size at a time)."""
+        """Room in the pool for ``n_new`` more voxels (grown by half its size at a time): in place
+        (``ndarray.resize``: realloc, no copy) while the evidence stays under ``_FRESH`` bytes and
+        nothing views it, else fresh zeroed arrays (``np.zeros``: untouched pages, which numpy
+        advises as transparent huge pages from 4 MiB, so filling them takes a fraction of the
+        page faults) with the rows in use copied."""
         need = self.n_voxels + n_new
         if need >= np.iinfo(np.int32).max:
             raise InputError("the voxel map would exceed 2^31 voxels; use a coarser resolution.")
         if need > len(self.count):
             first = self.n_voxels
             cap = max(need, len(self.count) + len(self.count) // 2)
-            try:    # in place (realloc: the pages kept, no copy) unless something views the pool
-                self.ev.resize((cap, self.num_class))
-                self.count.resize(cap)
-                return
-            except ValueError:
-                pass
+            if cap * self.num_class * 8 < _FRESH:
+                try:    # in place unless something views the pool
+                    self.ev.resize((cap, self.num_class))
+                    self.count.resize(cap)
+                    return
+                except ValueError:
+                    pass
             ev = np.zeros((cap, self.num_class))
             ev[:first] = self.ev[:first]
             count = np.zeros(cap, np.int64)
