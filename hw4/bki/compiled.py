@@ -393,32 +393,6 @@ def _axis2(p, b, res, ell2):  # pragma: no cover - compiled
     return q0, q1, q2, n, f
 
 
-@njit(cache=True, nogil=True, inline="always")
-def _window2(px, py, pz, bx, by, bz, res, ell2, out):  # pragma: no cover - compiled
-    """The window of 2 offsets per axis of a point (R = 1, span 2), as the general path of
-    :func:`_scan_evidence` finds it: True when every axis has 1 or 2 offsets within ell, then
-    ``out[0:2]``, ``out[2:4]``, ``out[4:6]`` the squared distances along x, y, z at the window's
-    offsets ``f - 1`` and ``f`` and ``out[6:9]`` the window's first index ``f`` (0 or 1) per
-    axis; False otherwise (an axis with none, or with 3 by rounding: the general path)."""
-    x0, x1, x2, nx, fx = _axis2(px, bx, res, ell2)
-    y0, y1, y2, ny, fy = _axis2(py, by, res, ell2)
-    z0, z1, z2, nz, fz = _axis2(pz, bz, res, ell2)
-    fx = min(fx, 1)
-    fy = min(fy, 1)
-    fz = min(fz, 1)
-    out[0] = x0 if fx == 0 else x1
-    out[1] = x1 if fx == 0 else x2
-    out[2] = y0 if fy == 0 else y1
-    out[3] = y1 if fy == 0 else y2
-    out[4] = z0 if fz == 0 else z1
-    out[5] = z1 if fz == 0 else z2
-    out[6] = fx
-    out[7] = fy
-    out[8] = fz
-    return nx > 0 and ny > 0 and nz > 0 and nx <= 2 and ny <= 2 and nz <= 2
-
-
-
 @njit(cache=True, nogil=True)
 def _scan_evidence(points, labels, base, order, omask, t0, t1, x0, x1, lo, dims, R, res, ell2,
                    scale, sf2, table, counting, dense_k, span, vloc, vcnt, c0, w0, more, acc,
@@ -436,11 +410,12 @@ def _scan_evidence(points, labels, base, order, omask, t0, t1, x0, x1, lo, dims,
     arithmetic (``ceil(2 ell / r)``, capped at ``2 R + 1``). The point's candidates are the
     ``span^3`` offsets of the window that starts at the first such offset per axis (a point with
     more per axis, by rounding, takes all ``(2 R + 1)^3``; with R = 1 and span 2, the
-    SemanticKITTI settings, :func:`_window2` finds the window); those within ell are listed
-    without branches. The points go in batches (consecutive points of one x slab whose pairs fit
-    in ``_BATCH``): the batch's pairs are listed, their kernel weights computed in the loops of
-    :func:`_kernels`, then summed pair by pair in the same order. A target's local voxel is looked up in a ring of x
-    slabs of the box (``2^ceil(log2(2 R + 1))`` slabs of ``dims[1] * dims[2]`` int32, at most
+    SemanticKITTI settings, the window and its 8 pairs come from :func:`_axis2` per axis,
+    unrolled); those within ell are listed without branches. The points go in batches
+    (consecutive points of one x slab whose pairs fit in ``_BATCH``): the batch's pairs are
+    listed, their kernel weights computed in the loops of :func:`_kernels`, then summed pair by
+    pair in the same order. A target's local voxel is looked up in a ring of x slabs of the box
+    (``2^ceil(log2(2 R + 1))`` slabs of ``dims[1] * dims[2]`` int32, at most
     the box): the points come in increasing x, so a target's slab lies within ``R`` of the
     current one, and a slot is cleared (only the entries set, from a list per slot) when a slab
     further on takes it. The ring stays in cache where a box-sized table would not.
@@ -517,34 +492,57 @@ def _scan_evidence(points, labels, base, order, omask, t0, t1, x0, x1, lo, dims,
             t += 1
             by, bz = base[i, 1], base[i, 2]
             m_start = m
+            use_general = False
             if counting:
                 if bx >= x0 and bx < x1:
                     cand_d2[m] = 0.0
                     cand_r[m] = ((bx - lo[0]) & smask) * s1 + (by - lo[1]) * d2z + (bz - lo[2])
                     cand_o[m] = (R << 42) | (R << 21) | R
                     m += 1
-            elif w == 3 and L == 2 and _window2(points[i, 0], points[i, 1], points[i, 2], bx,
-                                                by, bz, res, ell2, sq2):
-                # the common window (R = 1, ell <= r): per axis the 2 offsets from _window2
-                f0 = np.int64(sq2[6])
-                f1 = np.int64(sq2[7])
-                f2 = np.int64(sq2[8])
-                for a in range(2):
-                    vx = bx + f0 + a - 1
-                    inx = vx >= x0 and vx < x1
-                    rx = ((vx - lo[0]) & smask) * s1
-                    for b in range(2):
-                        vy = by + f1 + b - 1
-                        sxy = sq2[a] + sq2[2 + b]
-                        rxy = rx + (vy - lo[1]) * d2z - lo[2]
-                        for cz in range(2):
-                            vz = bz + f2 + cz - 1
-                            d2 = sxy + sq2[4 + cz]
+            elif w == 3 and L == 2:
+                # the window of 2 offsets per axis (as the general path finds it), unrolled
+                q0, q1, q2, nx, fx = _axis2(points[i, 0], bx, res, ell2)
+                r0, r1, r2, ny, fy = _axis2(points[i, 1], by, res, ell2)
+                u0, u1, u2, nz, fz = _axis2(points[i, 2], bz, res, ell2)
+                if nx == 0 or ny == 0 or nz == 0:
+                    continue
+                if nx > 2 or ny > 2 or nz > 2:     # 3 offsets on an axis (rounding)
+                    use_general = True
+                else:
+                    use_general = False
+                    f0 = min(fx, 1)
+                    f1 = min(fy, 1)
+                    f2 = min(fz, 1)
+                    sxa = q0 if f0 == 0 else q1
+                    sxb = q1 if f0 == 0 else q2
+                    sya = r0 if f1 == 0 else r1
+                    syb = r1 if f1 == 0 else r2
+                    sza = u0 if f2 == 0 else u1
+                    szb = u1 if f2 == 0 else u2
+                    rz = bz + f2 - 1 - lo[2]
+                    for a in range(2):
+                        vx = bx + f0 + a - 1
+                        inx = (vx >= x0) & (vx < x1)
+                        rx = ((vx - lo[0]) & smask) * s1
+                        sx = sxa if a == 0 else sxb
+                        for b in range(2):
+                            vy = by + f1 + b - 1
+                            sxy = sx + (sya if b == 0 else syb)
+                            rxy = rx + (vy - lo[1]) * d2z + rz
+                            oab = ((f0 + a) << 42) | ((f1 + b) << 21) | f2
+                            d2 = sxy + sza
                             cand_d2[m] = d2
-                            cand_r[m] = rxy + vz
-                            cand_o[m] = ((f0 + a) << 42) | ((f1 + b) << 21) | (f2 + cz)
+                            cand_r[m] = rxy
+                            cand_o[m] = oab
+                            m += (d2 < ell2) & inx
+                            d2 = sxy + szb
+                            cand_d2[m] = d2
+                            cand_r[m] = rxy + 1
+                            cand_o[m] = oab + 1
                             m += (d2 < ell2) & inx
             else:
+                use_general = True
+            if use_general and not counting:
                 px, py, pz = points[i, 0], points[i, 1], points[i, 2]
                 f0 = w
                 f1 = w

@@ -17,9 +17,9 @@ the keys of the blocks seen so far maps each block to a row of a table that hold
 block, the slot of its evidence in a pool with one row per voxel with evidence (``-1``: none yet).
 Table and pool grow (by half their size at a time; the pool in place, ``ndarray.resize``, while
 small and not viewed, beyond 4 MiB into fresh zeroed arrays) with the observed volume, never with
-a bounding box, and empty voxels cost 4 bytes. A scan's S-BKI sums over all its (training point, voxel) pairs
-run in one order (points in raveled voxel order, per point the offsets in lexicographic order),
-so the map is deterministic. Two engines give the same map bit for bit: ``"compiled"`` (the
+a bounding box, and empty voxels cost 4 bytes. A scan's S-BKI sums over all its (training point,
+voxel) pairs run in one order (points in raveled voxel order, per point the offsets in
+lexicographic order), so the map is deterministic. Two engines give the same map bit for bit: ``"compiled"`` (the
 default; :mod:`hw4.bki.compiled`, numba; ``HW4_THREADS`` threads, default 1, the same map on any
 number) and ``"numpy"``, the readable vectorised
 reference (:mod:`hw4.bki.kernel_sums` and the S-CSM counts and merge below), which needs no numba.
