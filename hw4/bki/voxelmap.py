@@ -16,7 +16,7 @@ Storage is a hash of blocks: the voxels are grouped in blocks of ``4 x 4 x 4``; 
 the keys of the blocks seen so far maps each block to a row of a table that holds, per voxel of the
 block, the slot of its evidence in a pool with one row per voxel with evidence (``-1``: none yet).
 Table and pool grow (by half their size at a time; the pool in place, ``ndarray.resize``, while
-small and not viewed, beyond 4 MiB into fresh zeroed arrays) with the observed volume, never with
+small and not viewed, beyond 4 MiB into fresh arrays) with the observed volume, never with
 a bounding box, and empty voxels cost 4 bytes. A scan's S-BKI sums over all its (training point,
 voxel) pairs run in one order (points in raveled voxel order, per point the offsets in
 lexicographic order), so the map is deterministic. Two engines give the same map bit for bit: ``"compiled"`` (the
@@ -247,17 +247,19 @@ class VoxelMap:
                 self._reserve(int(np.count_nonzero(  # before the table changes
                     (vloc.reshape(-1, B3)[lbs] >= 0) & (self.table[rows] < 0))))
             slot_of, n_voxels = _assign(self.table, rows, lbs, vloc, len(vcnt), self.n_voxels)
-            self._reserve(n_voxels - self.n_voxels)
+            first = self.n_voxels
+            self._reserve(n_voxels - first)
             self.n_voxels = n_voxels
             _accumulate(slot_of, vcnt, c0, w0, more, ecls, evalue, enext, acc, self.ev,
-                        self.count)
+                        self.count, first)
 
     def _reserve(self, n_new: int) -> None:
         """Room in the pool for ``n_new`` more voxels (grown by half its size at a time): in place
         (``ndarray.resize``: realloc, no copy) while the evidence stays under ``_FRESH`` bytes and
-        nothing views it, else fresh zeroed arrays (``np.zeros``: untouched pages, which numpy
-        advises as transparent huge pages from 4 MiB, so filling them takes a fraction of the
-        page faults) with the rows in use copied."""
+        nothing views it, else fresh arrays (``np.empty``: untouched pages, which numpy advises
+        as transparent huge pages from 4 MiB, so filling them takes a fraction of the page
+        faults, and no zeroing) with the rows in use copied. Rows beyond ``n_voxels`` are
+        undefined: a voxel's row is zeroed when it gets its slot."""
         need = self.n_voxels + n_new
         if need >= np.iinfo(np.int32).max:
             raise InputError("the voxel map would exceed 2^31 voxels; use a coarser resolution.")
@@ -271,9 +273,9 @@ class VoxelMap:
                     return
                 except ValueError:
                     pass
-            ev = np.zeros((cap, self.num_class))
+            ev = np.empty((cap, self.num_class))
             ev[:first] = self.ev[:first]
-            count = np.zeros(cap, np.int64)
+            count = np.empty(cap, np.int64)
             count[:first] = self.count[:first]
             self.ev, self.count = ev, count
 
@@ -327,6 +329,8 @@ class VoxelMap:
             slots[new] = np.arange(first, first + n_new)
             self._reserve(n_new)
             self.table[rows[new], local[new]] = slots[new]
+            self.ev[first:first + n_new] = 0.0     # the new voxels' rows (see _reserve)
+            self.count[first:first + n_new] = 0
             self.n_voxels = first + n_new
         self.ev[slots] += add
         self.count[slots] += cnt
