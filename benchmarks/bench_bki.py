@@ -135,7 +135,7 @@ def time_benchmark(dataset: str, repeat: int) -> None:
     for k, (per, vmap, _) in res.items():
         method = RUNS[k][0]
         v = vmap.view()
-        pairs = int(vmap.count.sum())
+        pairs = int(vmap.count[:vmap.n_voxels].sum())
         what = "(point, voxel) pairs" if method == "sbki" else "(point, voxel) counts"
         print(f"{k:15} {pairs:,} {what}, {pairs / per.sum() / 1e6:.1f} M per s; floor model "
               f"{FLOOR_NS_PER_PAIR:g} ns per pair: {pairs * FLOOR_NS_PER_PAIR * 1e-9 * 1e3:.1f} ms, "
@@ -247,7 +247,7 @@ def phase_benchmark(cfg, scans, repeat: int, res) -> None:
         best, vmap = phase_times(cfg, scans, method, repeat)
         same = _same(vmap, res[method][1])
         n = len(scans)
-        pairs = int(vmap.count.sum())
+        pairs = int(vmap.count[:vmap.n_voxels].sum())
         whole = res[method][0].sum()
         print(f"where the time goes, {TITLE[method]} (compiled, one thread, each phase timed "
               f"alone, best of {repeat}), ms per scan: "

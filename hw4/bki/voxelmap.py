@@ -167,7 +167,8 @@ class VoxelMap:
         # per block (row) and voxel in it: the voxel's pool slot, -1 while it has no evidence
         self.table = np.full((16, B3), -1, np.int32)
         # per voxel with evidence: e_0 .. e_{K-1} (prior excluded) and the number of training
-        # points that reached it (decides "has evidence", free of rounding)
+        # points that reached it (decides "has evidence", free of rounding); rows from n_voxels
+        # on are spare room, undefined (see _reserve)
         self.ev = np.zeros((1024, self.num_class))
         self.count = np.zeros(1024, np.int64)
         self.n_blocks = 0
