@@ -226,11 +226,10 @@ def phase_times(cfg, scans, method: str, repeat: int):
             t = lap("block rows", t)
             slot_of, n_voxels = C._assign(vmap.table, rows, lbs, vloc, len(part[2]),
                                           vmap.n_voxels)
-            first = vmap.n_voxels
-            vmap._reserve(n_voxels - first)
+            vmap._reserve(n_voxels - vmap.n_voxels)
             vmap.n_voxels = n_voxels
             t = lap("new slots, pool growth", t)
-            C._accumulate(slot_of, *part[2:], vmap.ev, vmap.count, first)
+            C._accumulate(slot_of, *part[2:], vmap.ev, vmap.count)
             lap("sums added", t)
             vmap.n_scans += 1
         best = {k: min(best.get(k, np.inf), v) for k, v in got.items()}

@@ -833,19 +833,14 @@ def _assign(table, rows, lbs, vloc, n_local, n_voxels):  # pragma: no cover - co
 
 
 @njit(cache=True, nogil=True)
-def _accumulate(slot_of, vcnt, c0, w0, more, ecls, evalue, enext, acc, ev, count, first):  # pragma: no cover - compiled
+def _accumulate(slot_of, vcnt, c0, w0, more, ecls, evalue, enext, acc, ev, count):  # pragma: no cover - compiled
     """Add the scan's evidence of each local voxel to its pool slot ``slot_of`` (voxel after
     voxel; the voxels are distinct, so the order does not change a value): its pair count, and
-    per class the scan's sum (``ev[s, c] += sum``, as the numpy engine adds them). Slots from
-    ``first`` on are new (their rows not yet set): zeroed first."""
+    per class the scan's sum (``ev[s, c] += sum``, as the numpy engine adds them)."""
     K = ev.shape[1]
     dense = acc.shape[0] > 0
     for v in range(slot_of.shape[0]):
         s = slot_of[v]
-        if s >= first:
-            count[s] = 0
-            for q in range(K):
-                ev[s, q] = 0.0
         count[s] += vcnt[v]
         if dense:   # dense sums: every class (adding a 0 leaves a value as it is)
             for q in range(K):

@@ -248,37 +248,40 @@ class VoxelMap:
                 self._reserve(int(np.count_nonzero(  # before the table changes
                     (vloc.reshape(-1, B3)[lbs] >= 0) & (self.table[rows] < 0))))
             slot_of, n_voxels = _assign(self.table, rows, lbs, vloc, len(vcnt), self.n_voxels)
-            first = self.n_voxels
-            self._reserve(n_voxels - first)
+            self._reserve(n_voxels - self.n_voxels)
             self.n_voxels = n_voxels
             _accumulate(slot_of, vcnt, c0, w0, more, ecls, evalue, enext, acc, self.ev,
-                        self.count, first)
+                        self.count)
 
     def _reserve(self, n_new: int) -> None:
-        """Room in the pool for ``n_new`` more voxels (grown by half its size at a time): in place
-        (``ndarray.resize``: realloc, no copy) while the evidence stays under ``_FRESH`` bytes and
-        nothing views it, else fresh arrays (``np.empty``: untouched pages, which numpy advises
-        as transparent huge pages from 4 MiB, so filling them takes a fraction of the page
-        faults, and no zeroing) with the rows in use copied. Rows beyond ``n_voxels`` are
-        undefined: a voxel's row is zeroed when it gets its slot."""
+        """Room in the pool for ``n_new`` more voxels, their rows zeroed. The pool grows by half
+        its size at a time: in place (``ndarray.resize``: realloc, no copy) while the evidence
+        stays under ``_FRESH`` bytes and nothing views it, else into fresh arrays (``np.empty``:
+        untouched pages, which numpy advises as transparent huge pages from 4 MiB, so filling
+        them takes a fraction of the page faults) with the rows in use copied. Rows beyond
+        ``n_voxels`` are spare room, undefined until reserved."""
         need = self.n_voxels + n_new
         if need >= np.iinfo(np.int32).max:
             raise InputError("the voxel map would exceed 2^31 voxels; use a coarser resolution.")
+        first = self.n_voxels
         if need > len(self.count):
-            first = self.n_voxels
             cap = max(need, len(self.count) + len(self.count) // 2)
+            grown = False
             if cap * self.num_class * 8 < _FRESH:
                 try:    # in place unless something views the pool
                     self.ev.resize((cap, self.num_class))
                     self.count.resize(cap)
-                    return
+                    grown = True
                 except ValueError:
                     pass
-            ev = np.empty((cap, self.num_class))
-            ev[:first] = self.ev[:first]
-            count = np.empty(cap, np.int64)
-            count[:first] = self.count[:first]
-            self.ev, self.count = ev, count
+            if not grown:
+                ev = np.empty((cap, self.num_class))
+                ev[:first] = self.ev[:first]
+                count = np.empty(cap, np.int64)
+                count[:first] = self.count[:first]
+                self.ev, self.count = ev, count
+        self.ev[first:need] = 0.0     # the new voxels' rows, in order (pages touched in order)
+        self.count[first:need] = 0
 
     def _count(self, key, shift, dims):
         """S-CSM: the number of training points per touched voxel and class.
@@ -330,8 +333,6 @@ class VoxelMap:
             slots[new] = np.arange(first, first + n_new)
             self._reserve(n_new)
             self.table[rows[new], local[new]] = slots[new]
-            self.ev[first:first + n_new] = 0.0     # the new voxels' rows (see _reserve)
-            self.count[first:first + n_new] = 0
             self.n_voxels = first + n_new
         self.ev[slots] += add
         self.count[slots] += cnt
