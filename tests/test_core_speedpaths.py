@@ -121,3 +121,38 @@ def test_cells_behind_the_laser_agree_with_numpy(span, model, nearest):
         np.testing.assert_allclose(a, b, rtol=1e-12, atol=0)
     else:
         np.testing.assert_array_equal(a, b)
+
+
+@pytest.mark.parametrize("dtype", [np.bool_, np.int32, np.int64, np.float16, np.float32])
+def test_row_sum_of_other_dtypes_is_numpys(dtype):
+    """The column chain serves float64 only: other dtypes get numpy's promotion (bool and int32
+    sum as int64, no overflow)."""
+    a = np.array([[1, 1, 0], [2 ** 15 - 1, 1, 7]]).astype(dtype)
+    if dtype is np.int32:
+        a[1, 0] = 2 ** 31 - 1
+    got, want = posterior._row_sum(a), a.sum(axis=1, keepdims=True)
+    assert got.dtype == want.dtype and np.array_equal(got, want)
+
+
+@pytest.mark.parametrize("engine", ["compiled", "numpy"])
+@pytest.mark.parametrize("where", ["scan nan", "scan inf", "pose nan", "pose inf"])
+def test_non_finite_inputs_are_refused_by_both_engines(engine, where):
+    """The shortcuts are exact for finite data only (the data checks refuse the rest on the
+    command line): count_evidence itself refuses NaN or inf end points and poses in one line."""
+    from hw4.core.errors import InputError
+    from hw4.core.evidence import count_evidence
+    from hw4.core.grid import Grid
+    rng = np.random.default_rng(3)
+    poses = np.column_stack([rng.uniform(-1, 1, 6), rng.uniform(-1, 1, 6), rng.uniform(-3, 3, 6)])
+    ang = np.linspace(-np.pi / 2, np.pi / 2, 40)
+    scans = [np.vstack([2 * np.cos(ang), 2 * np.sin(ang)]) for _ in range(6)]
+    bad = np.nan if "nan" in where else np.inf
+    if where.startswith("scan"):
+        scans[2][0, 5] = bad
+    else:
+        poses[4, 2 if bad is np.nan else 0] = bad
+    grid = Grid(0.2, (-3.0, 3.0), (-3.0, 3.0))
+    with pytest.raises(InputError, match="finite"):
+        count_evidence(grid, poses, scans, model="continuous", nearest_poses=4, engine=engine)
+    with pytest.raises(InputError, match="finite"):
+        count_evidence(grid, poses, scans, model="discrete", nearest_poses=None, engine=engine)

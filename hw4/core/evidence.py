@@ -187,6 +187,8 @@ def count_evidence(grid: Grid, poses, scans, *, model: str = "discrete", semanti
         per_cell = len(poses) if nearest_poses is None else min(nearest_poses, len(poses))
         big = beams == "all" or grid.n_cells * per_cell >= COMPILED_FROM
         engine = "compiled" if big else "numpy"
+    if poses.ndim != 2 or poses.shape[1] < 3 or not np.isfinite(poses[:, :3]).all():
+        raise InputError("poses must be a (T, 3) array of finite x [m], y [m], heading [rad].")
     table = BeamTable.from_scans(scans, compiled=engine == "compiled")
     n_classes = num_labels + 1 if semantic else 2
     if semantic:

@@ -20,9 +20,10 @@ def _row_sum(alpha):
     """``alpha.sum(axis=1, keepdims=True)``. For fewer than ``COLUMN_CHAIN`` columns numpy adds a
     row's entries one after the other from the first; so does the chain of column additions
     here, the same sums bit for bit (tests/test_core_speedpaths.py), in a third of the time of
-    the row reduction (its inner loop of K < 8 entries is slow)."""
+    the row reduction (its inner loop of K < 8 entries is slow). float64 only: for other dtypes
+    numpy's sum promotes (bool and small ints to int64) and is used as it is."""
     k = alpha.shape[1]
-    if not 1 <= k < COLUMN_CHAIN:
+    if not 1 <= k < COLUMN_CHAIN or alpha.dtype != np.float64:   # (other dtypes: numpy's promotion)
         return alpha.sum(axis=1, keepdims=True)
     s = alpha[:, 0].copy()
     for j in range(1, k):

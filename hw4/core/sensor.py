@@ -9,6 +9,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .errors import InputError
+
 TWO_PI = 2.0 * np.pi
 Z_MAX = 30.0           # maximum range of the laser [m]
 N_BEAMS = 133          # the template's beam count; w_beam = 2 pi / N_BEAMS [rad]
@@ -72,7 +74,8 @@ class BeamTable:
 
     @classmethod
     def from_scans(cls, scans, compiled: bool = False) -> "BeamTable":
-        """The table of a list of T scans (2, N) or (3, N) [m], robot frame. ``compiled``: build
+        """The table of a list of T scans (2, N) or (3, N) [m], robot frame (finite end points,
+        else :class:`hw4.core.errors.InputError`). ``compiled``: build
         the per-pose bin table with :func:`hw4.core.compiled.bin_table` (the same arrays, one
         pass instead of five numpy passes over its T x BINS entries)."""
         shapes = [np.shape(s) for s in scans]
@@ -87,6 +90,9 @@ class BeamTable:
             xy = np.concatenate([np.asarray(s, dtype=float)[:2] for s in scans], axis=1)
             labels = (np.concatenate([np.asarray(s)[2] for s in scans]).astype(np.int64)
                       if all(sh[0] >= 3 for sh in shapes) else None)
+        if not np.isfinite(xy).all():
+            raise InputError("scans must hold finite end points [m] (no NaN or inf); "
+                             "drop beams without a return before counting.")
         ranges, bearings = polar(xy)
         if labels is None:
             labels = np.zeros(len(ranges), dtype=np.int64)
