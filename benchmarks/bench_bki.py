@@ -219,9 +219,10 @@ def phase_times(cfg, scans, method: str, repeat: int):
                                          *scratch)
             t = lap("kernel sums", t)
             blk, vloc = part[0], part[1]
-            rows, lbs, vmap.keys, vmap.slots, n_new = C._block_rows(blk, lo, dims, vmap.keys,
-                                                                    vmap.slots, vmap.n_blocks)
+            rows, lbs, keys, slots, n_new = C._block_rows(blk, lo, dims, vmap.keys, vmap.slots,
+                                                          vmap.n_blocks)
             vmap._grow_table(vmap.n_blocks + n_new)
+            vmap.keys, vmap.slots = keys, slots
             vmap.n_blocks += n_new
             t = lap("block rows", t)
             slot_of, n_voxels = C._assign(vmap.table, rows, lbs, vloc, len(part[2]),

@@ -90,3 +90,33 @@ def test_voxel_order_is_stable_and_falls_back_to_argsort():
     okeys, omask, nb = compiled.voxel_order(base, lo, wide)
     wcodes = ((base - lo) * np.array([wide[1] * wide[2], wide[2], 1])).sum(axis=1)
     assert nb == 0 and np.array_equal(okeys & omask, np.argsort(wcodes, kind="stable"))
+
+
+@pytest.mark.parametrize("engine", ["compiled", "numpy"])
+@pytest.mark.parametrize("method", ["scsm", "sbki"])
+def test_a_failed_update_leaves_the_map_as_it_was(monkeypatch, engine, method):
+    """Whatever can fail in an update (the pool's growth: MemoryError; an interrupt) comes before
+    the map changes: after a failed scan the map is the one before it, and the next scans give
+    the map of a run that never saw the failed one (no phantom voxels, no shared slots)."""
+    from hw4.bki.voxelmap import VoxelMap
+    rng = np.random.default_rng(7)
+    scans = [(rng.normal(c, 2, (300, 3)), rng.integers(0, 3, 300)) for c in (0.0, 5.0, -5.0)]
+    ref = VoxelMap(0.5, 3, method, engine=engine)
+    ref.update(*scans[0])
+    ref.update(*scans[2])
+    m = VoxelMap(0.5, 3, method, engine=engine)
+    m.update(*scans[0])
+    before = [a.copy() for a in m.evidence()]
+
+    def boom(self, n):
+        raise MemoryError("simulated")
+    monkeypatch.setattr(VoxelMap, "_reserve", boom)
+    with pytest.raises(MemoryError):
+        m.update(*scans[1])
+    monkeypatch.undo()
+    assert all(np.array_equal(a, b) for a, b in zip(m.evidence(), before))
+    m.update(*scans[2])
+    assert all(np.array_equal(a, b) for a, b in zip(m.evidence(), ref.evidence()))
+    used = m.table[m.slots].ravel()
+    used = used[used >= 0]
+    assert len(used) == len(np.unique(used)) == m.n_voxels

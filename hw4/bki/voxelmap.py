@@ -240,15 +240,26 @@ class VoxelMap:
         dims = np.ascontiguousarray(dims, dtype=np.int64)
         for blk, vloc, vcnt, c0, w0, more, ecls, evalue, enext, acc in parts:
             # touched blocks in key order, their rows (new blocks merged into keys / slots)
-            rows, lbs, self.keys, self.slots, n_new = _block_rows(blk, lo, dims, self.keys,
-                                                                  self.slots, self.n_blocks)
+            # What can fail (memory, the 2^31 limit) leaves the map as it was before this part:
+            # the block keys change once the table has room, and new slots are taken back from
+            # the table when the pool cannot grow (MemoryError, an interrupt).
+            rows, lbs, keys, slots, n_new = _block_rows(blk, lo, dims, self.keys, self.slots,
+                                                        self.n_blocks)
             self._grow_table(self.n_blocks + n_new)
+            self.keys, self.slots = keys, slots
             self.n_blocks += n_new
             if self.n_voxels + len(vcnt) >= np.iinfo(np.int32).max:   # near the limit: refuse
                 self._reserve(int(np.count_nonzero(  # before the table changes
                     (vloc.reshape(-1, B3)[lbs] >= 0) & (self.table[rows] < 0))))
-            slot_of, n_voxels = _assign(self.table, rows, lbs, vloc, len(vcnt), self.n_voxels)
-            self._reserve(n_voxels - self.n_voxels)
+            first = self.n_voxels
+            try:
+                slot_of, n_voxels = _assign(self.table, rows, lbs, vloc, len(vcnt), first)
+                self._reserve(n_voxels - first)
+            except BaseException:
+                taken = self.table[rows]
+                taken[taken >= first] = -1
+                self.table[rows] = taken
+                raise
             self.n_voxels = n_voxels
             _accumulate(slot_of, vcnt, c0, w0, more, ecls, evalue, enext, acc, self.ev,
                         self.count)
