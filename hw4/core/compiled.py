@@ -154,6 +154,22 @@ def _beam_gap(r, diff, lim):  # pragma: no cover - compiled
 
 
 @njit(cache=True, nogil=True, inline="always")
+def _lines_beyond(pa, hi_out, bmin_t, bmax_t, r, lim):  # pragma: no cover - compiled
+    """For a cell behind the laser (fast bearing ``pa`` [rad] outside the pose's beams, below
+    ``lo_out`` or above ``hi_out``; ``bmin_t``, ``bmax_t`` its first and last beam's bearing)
+    at range r [m]: whether every beam's line passes farther than lim [m] from it, with a
+    margin. The angle to the nearer end of the beams (around the wrap), less 2 EPS, bounds the
+    angle to every beam from below; r sin of it (bounded below by x - x^3 / 6) bounds the gap."""
+    if pa > hi_out:
+        dlt = min(pa - bmax_t, (bmin_t + TWO_PI) - pa)
+    else:
+        dlt = min(bmin_t - pa, pa - (bmax_t - TWO_PI))
+    dlt = min(dlt - 2.0 * EPS - 1e-12, PI / 2)
+    return dlt > 0.0 and (r * (dlt - dlt * dlt * dlt / 6.0) * (1.0 - 1e-12)
+                          > lim + 2.0 * (r * EPS + 1e-12) + 1e-9)
+
+
+@njit(cache=True, nogil=True, inline="always")
 def _atan2_fast(y, x):  # pragma: no cover - compiled
     """arctan2(y, x) [rad] within 1e-10 (octant reduction, then atan(u) for |u| <= tan(pi/8) by
     its Taylor series to u^21: remainder below 0.4143^23 / 23 < 7e-11)."""
@@ -822,13 +838,7 @@ def _pose_pass(c0, c1, cells, poses, nn, ranges, cls_hit, srt, key, seg_start, s
                         n_pairs += 1  # beyond every beam's width, by more than EPS: no count
                         n_fast += 1
                         continue
-                    if pa > hi_out:
-                        dlt = min(pa - bmax_t, (bmin_t + TWO_PI) - pa)
-                    else:
-                        dlt = min(bmin_t - pa, pa - (bmax_t - TWO_PI))
-                    dlt = min(dlt - 2.0 * EPS - 1e-12, PI / 2)
-                    if dlt > 0.0 and (r * (dlt - dlt * dlt * dlt / 6.0) * (1.0 - 1e-12)
-                                      > lim + 2.0 * (r * EPS + 1e-12) + 1e-9):
+                    if _lines_beyond(pa, hi_out, bmin_t, bmax_t, r, lim):
                         n_pairs += 1  # every beam's line passes farther than l: no sums
                         n_fast += 1
                         continue
@@ -1068,13 +1078,7 @@ def _poses_kernel(row0, row1, gx, gy, poses, reach, ranges, cls_hit, srt, key,
                             n_pairs += 1
                             n_fast += 1
                             continue
-                        if pa > hi_out:
-                            dlt = min(pa - bmax_t, (bmin_t + TWO_PI) - pa)
-                        else:
-                            dlt = min(bmin_t - pa, pa - (bmax_t - TWO_PI))
-                        dlt = min(dlt - 2.0 * EPS - 1e-12, PI / 2)
-                        if dlt > 0.0 and (r * (dlt - dlt * dlt * dlt / 6.0) * (1.0 - 1e-12)
-                                          > lim + 2.0 * (r * EPS + 1e-12) + 1e-9):
+                        if _lines_beyond(pa, hi_out, bmin_t, bmax_t, r, lim):
                             n_pairs += 1  # every beam's line passes farther than l
                             n_fast += 1
                             continue
