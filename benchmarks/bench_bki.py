@@ -53,6 +53,8 @@ import time
 
 import numpy as np
 
+from machine import describe
+
 from hw4.bki import (Scan, VoxelMap, load_config, new_map, scan_source, training_data,
                      validate_scan)
 
@@ -523,6 +525,7 @@ def main() -> None:
         return _child_first()
     if args.child_synthetic:
         return _child_synthetic(int(args.child_synthetic[0]), args.child_synthetic[1])
+    print(describe())
     print(f"{os.cpu_count()} CPUs; load average {os.getloadavg()[0]:.1f} at the start")
     first_update_benchmark()
     time_benchmark("semantickitti", args.repeat)

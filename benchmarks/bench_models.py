@@ -44,6 +44,8 @@ from pathlib import Path
 import numpy as np
 from scipy.io import loadmat
 
+from machine import describe
+
 from hw4.core.data import INTEL, INTEL_SEMANTIC, ensure
 from hw4.tasks import load_task_data, model_class, task_name
 
@@ -200,6 +202,7 @@ def main(argv=None):
     rng = np.random.default_rng(0)
     rows = []
     same_threads = []
+    print(describe())
     print(f"load average {load_average()} ({os.cpu_count()} cores)")
     print(f"times in ms, best of {args.repeat}; pairs = (cell, pose) pairs in the field (beams='all':"
           f" (point, cell) pairs within l); floor = {FLOOR_NS:g} ns per pair and free sample")
