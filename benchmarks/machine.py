@@ -7,18 +7,17 @@ runs from different days; the ratios to peers measured in the same run do not de
 """
 from __future__ import annotations
 
-import os
 import platform
 from pathlib import Path
 
 
 def describe() -> str:
-    """CPU model, clock [MHz], the widest vector extension numba can use, cores (Linux; elsewhere
-    what :mod:`platform` knows)."""
+    """CPU model, clock [MHz] and the widest vector extension numba can use (Linux; elsewhere
+    what :mod:`platform` knows). The cores and the load are printed by each benchmark itself."""
     try:
         info = Path("/proc/cpuinfo").read_text()
     except OSError:
-        return f"machine: {platform.processor() or platform.machine()}, {os.cpu_count()} cores"
+        return f"machine: {platform.processor() or platform.machine()}"
     fields = {}
     for line in info.splitlines():
         key, _, value = line.partition(":")
@@ -31,5 +30,4 @@ def describe() -> str:
         mhz = f"{float(mhz):.0f}"
     except ValueError:
         pass
-    return (f"machine: {fields.get('model name', platform.machine())}, {mhz} MHz, {vector}, "
-            f"{os.cpu_count()} cores")
+    return f"machine: {fields.get('model name', platform.machine())}, {mhz} MHz, {vector}"
