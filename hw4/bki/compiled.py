@@ -6,10 +6,11 @@ module repeats every arithmetic step of it in loops, so the training points and 
 same bit for bit (the tests compare the two engines):
 
 * **Downsampling** (:func:`downsample`): the leaf ``floor(x / size)`` of every point (keys
-  relative to the scan's box of leaves, lexicographic in x, y, z), one ``np.sort`` of the values
-  ``key << nb | index`` (the stable order of the leaves), each point's leaf scattered back to
-  its position, then the points streamed in input order into their leaf's sums (from 0: what
-  ``bincount`` adds), divided by their number, and the majority label, ties to the smallest.
+  relative to the scan's box of leaves, lexicographic in x, y, z), the points grouped into runs
+  (consecutive points in one leaf), one ``np.sort`` of the values ``key << nb | run`` (each
+  leaf's runs in input order), then each leaf's points streamed run by run into its sums (from
+  0, in input order: what ``bincount`` adds), divided by their number, and the majority label,
+  ties to the smallest.
 * **Free samples** (:func:`free_samples`): per ray the numpy formulas, element by element
   (``origin + (diff / L) * dist``, ``L = sqrt((dx^2 + dy^2) + dz^2)`` as ``np.linalg.norm``);
   :func:`free_leaves` downsamples them as they are made (a hash of leaves, sums in sample
@@ -57,16 +58,23 @@ def _leaf_keys(points, size, nb=0):  # pragma: no cover - compiled
     scan's box of leaves, or the packed key of training.py when that box is too large), and the
     largest key possible. ``far`` when a leaf index lies outside +-2^20 (keys then unset). The
     leaves first in a loop without branches (the divisions vectorised), then the box, then the
-    keys; ``points`` C-contiguous. With ``nb`` > 0 the box's keys come as ``key << nb | index``
-    when that fits in 63 bits (then ``packed``)."""
+    keys; ``points`` C-contiguous. Returns ``(keys, starts, top, far, packed)``.
+
+    With ``nb`` > 0 and the box's keys and ``nb`` bits fitting in 63 (then ``packed``), the
+    points come as runs: maximal stretches of consecutive points in one leaf (a lidar's
+    neighbouring beams share leaves: about half the points of a SemanticKITTI scan start no new
+    run), ``keys[r] = key << nb | r`` per run ``r`` in input order and ``starts`` (one more than
+    the runs) the first point of each run and the point count. Otherwise ``keys`` is per point
+    and ``starts`` empty."""
     n = points.shape[0]
     flat = points.reshape(-1)
     cells = np.empty(3 * n)
     for j in range(3 * n):
         cells[j] = np.floor(flat[j] / size)
     keys = np.empty(n, np.int64)
+    starts = np.empty(0, np.int64)
     if n == 0:
-        return keys, 0, False, False
+        return keys, starts, 0, False, False
     lo0 = lo1 = lo2 = np.inf
     hi0 = hi1 = hi2 = -np.inf
     for i in range(n):
@@ -78,7 +86,7 @@ def _leaf_keys(points, size, nb=0):  # pragma: no cover - compiled
         hi2 = max(hi2, cells[3 * i + 2])
     if not (lo0 >= -_OFF and lo1 >= -_OFF and lo2 >= -_OFF and hi0 < _OFF and hi1 < _OFF
             and hi2 < _OFF):
-        return keys, 0, True, False
+        return keys, starts, 0, True, False
     l0, l1, l2 = np.int64(lo0), np.int64(lo1), np.int64(lo2)
     nx = np.int64(hi0) - l0 + 1
     ny = np.int64(hi1) - l1 + 1
@@ -88,35 +96,47 @@ def _leaf_keys(points, size, nb=0):  # pragma: no cover - compiled
             keys[i] = (((np.int64(cells[3 * i]) + _OFF) << 42)
                        | ((np.int64(cells[3 * i + 1]) + _OFF) << 21)
                        | (np.int64(cells[3 * i + 2]) + _OFF))
-        return keys, (1 << 63) - 1, False, False
+        return keys, starts, (1 << 63) - 1, False, False
     top = nx * ny * nz - 1
     bits = 0
     while (np.int64(1) << bits) <= top:
         bits += 1
-    sh = nb if (nb > 0 and bits + nb <= 63) else 0
-    for i in range(n):
-        keys[i] = (((((np.int64(cells[3 * i]) - l0) * ny + (np.int64(cells[3 * i + 1]) - l1)) * nz
-                    + (np.int64(cells[3 * i + 2]) - l2)) << sh) | (i if sh else 0))
-    return keys, top, False, sh > 0
+    if not (nb > 0 and bits + nb <= 63):
+        for i in range(n):
+            keys[i] = (((np.int64(cells[3 * i]) - l0) * ny + (np.int64(cells[3 * i + 1]) - l1))
+                       * nz + (np.int64(cells[3 * i + 2]) - l2))
+        return keys, starts, top, False, False
+    starts = np.empty(n + 1, np.int64)
+    r = 0
+    prev = np.int64(-1)               # keys are >= 0: the first point starts a run
+    for i in range(n):                # without branches: slot r written, kept if a run starts
+        kk = (((np.int64(cells[3 * i]) - l0) * ny + (np.int64(cells[3 * i + 1]) - l1)) * nz
+              + (np.int64(cells[3 * i + 2]) - l2))
+        keys[r] = (kk << nb) | r
+        starts[r] = i
+        r += kk != prev
+        prev = kk
+    starts[r] = n
+    return keys[:r], starts[:r + 1], top, False, True
 
 
 @njit(cache=True, nogil=True)
-def _group_packed(points, labels, packed, nb, num_labels):  # pragma: no cover - compiled
+def _group_runs(points, labels, packed, starts, nb, num_labels):  # pragma: no cover - compiled
     """Centroid and majority label (``labels`` empty: none) of each leaf, from ``packed``: the
-    sorted values ``key << nb | index`` (``index`` a point's position in the input). Each point's
-    leaf (its rank among the distinct keys) is scattered to its position; then the points are
-    streamed in input order, each added to its leaf's sums (from 0, in input order: what the
-    stable order and ``bincount`` add), and the sums divided by the counts. The majority: a
-    leaf whose points share one label has it (found without branches: each point against the
-    previous one of its leaf); the votes of the other leaves are counted over the sorted order (ties to
-    the smallest label)."""
-    n = points.shape[0]
+    sorted values ``key << nb | run`` (``run`` numbered in input order, its points
+    ``starts[run]`` .. ``starts[run + 1] - 1``). Each run's leaf (its rank among the distinct
+    keys) is scattered to the run; then the runs are streamed in input order, each point added
+    to its leaf's sums (from 0, in input order: what the stable order and ``bincount`` add), and
+    the sums divided by the counts. The majority: a leaf whose points share one label has it
+    (each point against the previous one of its leaf); the votes of the other leaves are
+    counted over the sorted order, run by run (ties to the smallest label)."""
+    nr = packed.shape[0]
     mask = (np.int64(1) << nb) - 1
-    inv = np.empty(n, np.int32)
+    inv = np.empty(nr, np.int32)
     has = labels.shape[0] > 0
     m = 0
-    prev = np.int64(-1)               # keys are >= 0: the first point starts a leaf
-    for t in range(n):                # without branches
+    prev = np.int64(-1)               # keys are >= 0: the first run starts a leaf
+    for t in range(nr):               # without branches
         kk = packed[t] >> nb
         m += kk != prev
         prev = kk
@@ -124,17 +144,30 @@ def _group_packed(points, labels, packed, nb, num_labels):  # pragma: no cover -
     sums = np.zeros((m, 4))           # per leaf: the sums of x, y, z and the count (exact)
     maj = np.full(m if has else 0, -1, np.int64)   # per leaf: the label of its latest point
     mixed = np.zeros(m if has else 0, np.bool_)
-    for i in range(n):
-        g = inv[i]
-        sums[g, 0] += points[i, 0]
-        sums[g, 1] += points[i, 1]
-        sums[g, 2] += points[i, 2]
-        sums[g, 3] += 1.0
+    for r in range(nr):
+        g = inv[r]
+        sx = sums[g, 0]
+        sy = sums[g, 1]
+        sz = sums[g, 2]
+        c = sums[g, 3]
+        for i in range(starts[r], starts[r + 1]):
+            sx += points[i, 0]
+            sy += points[i, 1]
+            sz += points[i, 2]
+            c += 1.0
+        sums[g, 0] = sx
+        sums[g, 1] = sy
+        sums[g, 2] = sz
+        sums[g, 3] = c
         if has:                       # a label unlike its leaf's previous one: mixed
-            lab = labels[i]
-            r = maj[g]
-            mixed[g] |= (r >= 0) & (lab != r)
-            maj[g] = lab
+            rr = maj[g]
+            mx = mixed[g]
+            for i in range(starts[r], starts[r + 1]):
+                lab = labels[i]
+                mx |= (rr >= 0) & (lab != rr)
+                rr = lab
+            maj[g] = rr
+            mixed[g] = mx
     n_mixed = 0
     for g in range(mixed.shape[0]):
         n_mixed += mixed[g]
@@ -148,23 +181,30 @@ def _group_packed(points, labels, packed, nb, num_labels):  # pragma: no cover -
         votes = np.zeros(max(num_labels, 1), np.int64)
         t = 0
         g = 0
-        while t < n:
-            j = t + np.int64(sums[g, 3])
+        while t < nr:
+            kk = packed[t] >> nb
+            e = t + 1
+            while e < nr and (packed[e] >> nb) == kk:
+                e += 1
             if mixed[g]:
                 best = -1
                 bestc = 0
-                for u in range(t, j):
-                    lab = labels[packed[u] & mask]
-                    v = votes[lab] + 1
-                    votes[lab] = v
-                    if v > bestc or (v == bestc and lab < best):
-                        best = lab
-                        bestc = v
-                for u in range(t, j):
-                    votes[labels[packed[u] & mask]] = 0
+                for u in range(t, e):
+                    r = packed[u] & mask
+                    for i in range(starts[r], starts[r + 1]):
+                        lab = labels[i]
+                        v = votes[lab] + 1
+                        votes[lab] = v
+                        if v > bestc or (v == bestc and lab < best):
+                            best = lab
+                            bestc = v
+                for u in range(t, e):
+                    r = packed[u] & mask
+                    for i in range(starts[r], starts[r + 1]):
+                        votes[labels[i]] = 0
                 maj[g] = best
             g += 1
-            t = j
+            t = e
     return cen, maj
 
 
@@ -224,7 +264,7 @@ def _free_samples(hits, origin, length, fr):  # pragma: no cover - compiled
 
 @njit(cache=True, nogil=True)
 def _free_leaves(hits, origin, length, fr, size):  # pragma: no cover - compiled
-    """The leaves of :func:`_free_samples`' samples, as :func:`_leaf_keys` and :func:`_group_packed`
+    """The leaves of :func:`_free_samples`' samples, as :func:`_leaf_keys` and :func:`_group_runs`
     make them from the samples (without holding the samples): each sample's leaf
     ``floor(x / size)`` found in a hash of the leaves seen so far, its coordinates added to the
     leaf's sums in sample order (from 0): per leaf (in order of its first sample) its packed key,
@@ -867,15 +907,16 @@ def downsample(points: np.ndarray, labels, size: float, num_labels: int = 0):
         lab = np.ascontiguousarray(labels, dtype=np.int64)
         k = int(num_labels) if num_labels else (int(lab.max()) + 1 if len(lab) else 1)
     nb = max(1, int(len(points) - 1).bit_length())
-    keys, top, far, packed = _leaf_keys(points, float(size), nb)   # key << nb | index
+    keys, starts, top, far, packed = _leaf_keys(points, float(size), nb)   # per run: key << nb | run
     if far:
         return np.zeros((0, 3)), None, True
-    if not packed:                            # too wide to pack with the index: rank the keys
+    if not packed:                            # too wide to pack: rank the keys, a run per point
         keys = np.unique(keys, return_inverse=True)[1].astype(np.int64)
         keys <<= nb
         keys |= np.arange(len(keys))
-    keys.sort()                               # sorted: the stable order of the leaves
-    cen, maj = _group_packed(points, lab, keys, nb, k)
+        starts = np.arange(len(keys) + 1, dtype=np.int64)
+    keys.sort()                               # sorted: each leaf's runs in input order
+    cen, maj = _group_runs(points, lab, keys, starts, nb, k)
     return cen, (None if labels is None else maj), False
 
 
@@ -1071,5 +1112,5 @@ def _run(kernel, jobs):
     return list(_pool.map(lambda a: kernel(*a), jobs))
 
 
-KERNELS = (_kernels, _leaf_keys, _group_packed, _lengths, _free_samples, _free_leaves, _bases, _codes, _scan_evidence,
+KERNELS = (_kernels, _leaf_keys, _group_runs, _lengths, _free_samples, _free_leaves, _bases, _codes, _scan_evidence,
            _count_evidence, _block_rows, _assign, _accumulate)
