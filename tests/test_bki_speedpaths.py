@@ -20,6 +20,25 @@ def test_downsample_equals_numpy(spread, labelled):
     assert (gmaj is None and maj is None) or np.array_equal(gmaj, maj)
 
 
+@pytest.mark.parametrize("labelled", [True, False])
+def test_downsample_runs_equal_numpy(labelled):
+    """Runs of consecutive points in one leaf (as a lidar's neighbouring beams make them), a
+    leaf reached by several runs far apart, single-point runs and mixed labels within a run:
+    the same centroids and majorities as :func:`hw4.bki.training.downsample`."""
+    rng = np.random.default_rng(8)
+    seeds = rng.normal(0, 0.4, (300, 3))
+    reps = rng.integers(1, 9, len(seeds))
+    pts = np.repeat(seeds, reps, axis=0) + rng.uniform(0, 0.02, (reps.sum(), 3))
+    pts = np.vstack([pts, pts[::-7], pts[:50]])          # the same leaves again, later
+    lab = rng.integers(0, 4, len(pts)) if labelled else None
+    cen, maj = training.downsample(pts, lab, 0.1, 4 if labelled else None)
+    got, gmaj, far = compiled.downsample(pts, lab, 0.1, 4 if labelled else 0)
+    keys = training.leaf_keys(pts, 0.1)
+    assert np.count_nonzero(np.diff(keys)) + 1 < 0.6 * len(pts)   # long runs indeed
+    assert not far and np.array_equal(got, cen)
+    assert (gmaj is None and maj is None) or np.array_equal(gmaj, maj)
+
+
 @pytest.mark.parametrize("method, res, ell, K", [("sbki", 0.3, 0.3, 20), ("sbki", 0.1, 0.3, 4),
                                                  ("sbki", 0.2, 0.5, 6), ("scsm", 0.1, 0.3, 3),
                                                  ("scsm", 0.3, 0.3, 20)])
