@@ -400,10 +400,10 @@ def _kernels(d2, out, uu, jj, m, scale, sf2, table):  # pragma: no cover - compi
     (the coefficients of ``table`` read per pair)."""
     for q in range(m):
         r = np.sqrt(d2[q]) * scale
-        j = min(int(r), _PIECES - 1)
+        j = min(np.int32(r), np.int32(_PIECES - 1))     # int32: AVX2 converts it vectorised
         u = r - j
         uu[q] = u - 0.5
-        jj[q] = j * (_DEGREE + 1)
+        jj[q] = j * np.int32(_DEGREE + 1)
     tab = table.reshape(-1)
     for q in range(m):
         u = uu[q]
@@ -501,7 +501,7 @@ def _scan_evidence(points, labels, base, order, omask, t0, t1, x0, x1, lo, dims,
     cand_o = np.empty(cap + w3, np.int64)
     cand_k = np.empty(cap + w3)       # their kernel weights
     cand_u = np.empty(cap + w3)
-    cand_j = np.empty(cap + w3, np.int64)
+    cand_j = np.empty(cap + w3, np.int32)
     sq2 = np.empty(9)
     bpt = np.empty(cap + 1, np.int64)   # the batch's points (with pairs) and their first pair
     bfirst = np.empty(cap + 2, np.int64)
