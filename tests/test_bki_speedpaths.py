@@ -7,9 +7,10 @@ from hw4.bki import compiled, training
 
 @pytest.mark.parametrize("spread, labelled", [(3.0, True), (3.0, False), (2.0 ** 17, True)])
 def test_downsample_equals_numpy(spread, labelled):
-    """Leaf keys packed with the point index and sorted once, then streamed sums; a box of leaves
-    too wide to pack (spread 2^17 leaves per axis) ranks the keys first: the same centroids and
-    majorities as :func:`hw4.bki.training.downsample`."""
+    """Leaf keys in runs of consecutive points, one value per run packed with the run and sorted
+    once, then streamed sums; a box of leaves too wide to pack (spread 2^17 leaves per axis)
+    ranks the keys first: the same centroids and majorities as
+    :func:`hw4.bki.training.downsample`."""
     rng = np.random.default_rng(3)
     pts = rng.normal(0, spread * 0.1, (5000, 3))
     pts = np.vstack([pts, pts[:1000] + 1e-3])          # shared leaves, mixed labels
